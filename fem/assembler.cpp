@@ -1,0 +1,149 @@
+// Pattern, colouring and condensed scatter of the assembly loop; see assembler.hpp.
+#include "fem/assembler.hpp"
+
+#include <algorithm>
+#include <cstdint>
+#include <stdexcept>
+
+namespace rsw::fem {
+
+Assembler::Assembler(const Mesh& mesh, const DofMap& dofs, const Constraints& constraints)
+    : mesh_(mesh), dofs_(dofs), constraints_(constraints) {
+  if (!constraints.closed()) throw std::logic_error("Assembler: constraints must be closed");
+  if (constraints.n_dofs() != dofs.n_dofs()) throw std::logic_error("Assembler: constraints and dof map differ in size");
+  const int n_cells = mesh.n_cells();
+  const int n = constraints.n_free();
+
+  cell_dofs_.resize(n_cells);
+  std::vector<Eigen::Triplet<double>> triplets;
+  for (int e = 0; e < n_cells; ++e) {
+    dofs.cell_dofs(mesh, e, cell_dofs_[e]);
+    std::vector<int> reduced;
+    for (int d : cell_dofs_[e]) {
+      auto [b, end] = constraints.expansion(d);
+      for (auto it = b; it != end; ++it) reduced.push_back(it->dof);
+    }
+    std::sort(reduced.begin(), reduced.end());
+    reduced.erase(std::unique(reduced.begin(), reduced.end()), reduced.end());
+    for (int p : reduced)
+      for (int q : reduced) triplets.emplace_back(p, q, 0.0);
+  }
+  pattern_.resize(n, n);
+  pattern_.setFromTriplets(triplets.begin(), triplets.end());
+  pattern_.makeCompressed();
+
+  // Position of every contribution, in the exact order scatter() visits them.
+  const int* outer = pattern_.outerIndexPtr();
+  const int* inner = pattern_.innerIndexPtr();
+  position_start_.resize(n_cells + 1);
+  for (int e = 0; e < n_cells; ++e) {
+    position_start_[e] = static_cast<int>(positions_.size());
+    const auto& cd = cell_dofs_[e];
+    for (std::size_t b = 0; b < cd.size(); ++b) {
+      auto [qb, qe] = constraints.expansion(cd[b]);
+      for (auto q = qb; q != qe; ++q)
+        for (std::size_t a = 0; a < cd.size(); ++a) {
+          auto [pb, pe] = constraints.expansion(cd[a]);
+          for (auto p = pb; p != pe; ++p) {
+            const int* first = inner + outer[q->dof];
+            const int* last = inner + outer[q->dof + 1];
+            const int* hit = std::lower_bound(first, last, p->dof);
+            positions_.push_back(static_cast<int>(hit - inner));
+          }
+        }
+    }
+  }
+  position_start_[n_cells] = static_cast<int>(positions_.size());
+
+  // Greedy colouring: cells sharing a free dof get different colours.
+  std::vector<std::uint64_t> used(n, 0);
+  std::vector<int> colour(n_cells, 0);
+  int n_colours = 0;
+  for (int e = 0; e < n_cells; ++e) {
+    std::uint64_t forbidden = 0;
+    std::vector<int> reduced;
+    for (int d : cell_dofs_[e]) {
+      auto [b, end] = constraints.expansion(d);
+      for (auto it = b; it != end; ++it) {
+        forbidden |= used[it->dof];
+        reduced.push_back(it->dof);
+      }
+    }
+    int c = 0;
+    while (c < 64 && (forbidden >> c & 1u)) ++c;
+    if (c == 64) throw std::runtime_error("Assembler: more than 64 colours needed");
+    colour[e] = c;
+    for (int p : reduced) used[p] |= std::uint64_t{1} << c;
+    n_colours = std::max(n_colours, c + 1);
+  }
+  colours_.assign(n_colours, {});
+  for (int e = 0; e < n_cells; ++e) colours_[colour[e]].push_back(e);
+}
+
+void Assembler::scatter(int cell, const LocalSystem& local, SparseMatrix& K, Eigen::VectorXd& F,
+                        bool homogeneous, bool assemble_matrix) const {
+  const auto& cd = cell_dofs_[cell];
+  const int n_local = static_cast<int>(cd.size());
+  double* values = K.valuePtr();
+  const int* pos = positions_.data() + position_start_[cell];
+  // Vector part: F_e - K_e g for inhomogeneous constraints.
+  Eigen::VectorXd rhs = local.vector;
+  if (!homogeneous) {
+    for (int b = 0; b < n_local; ++b) {
+      const double g = constraints_.inhomogeneity(cd[b]);
+      if (g != 0.0) rhs -= local.matrix.col(b) * g;
+    }
+  }
+  for (int a = 0; a < n_local; ++a) {
+    auto [pb, pe] = constraints_.expansion(cd[a]);
+    for (auto p = pb; p != pe; ++p) F[p->dof] += p->weight * rhs[a];
+  }
+  if (!assemble_matrix) return;
+  for (int b = 0; b < n_local; ++b) {
+    auto [qb, qe] = constraints_.expansion(cd[b]);
+    for (auto q = qb; q != qe; ++q)
+      for (int a = 0; a < n_local; ++a) {
+        auto [pb, pe] = constraints_.expansion(cd[a]);
+        const double kab = local.matrix(a, b) * q->weight;
+        for (auto p = pb; p != pe; ++p) values[*pos++] += p->weight * kab;
+      }
+  }
+}
+
+void Assembler::assemble(const CellKernel& cell_kernel, const std::vector<FaceTerm>& face_terms,
+                         SparseMatrix& K, Eigen::VectorXd& F, bool homogeneous, bool assemble_matrix) const {
+  if (assemble_matrix) {
+    if (K.rows() != pattern_.rows() || K.nonZeros() != pattern_.nonZeros()) K = pattern_;
+    std::fill(K.valuePtr(), K.valuePtr() + K.nonZeros(), 0.0);
+  }
+  F.setZero(constraints_.n_free());
+  const int n_local = dofs_.dofs_per_cell();
+
+  if (cell_kernel) {
+    for (const auto& cells : colours_) {
+      const int n = static_cast<int>(cells.size());
+#pragma omp parallel
+      {
+        LocalSystem local;
+#pragma omp for schedule(static)
+        for (int k = 0; k < n; ++k) {
+          local.matrix.setZero(n_local, n_local);
+          local.vector.setZero(n_local);
+          cell_kernel(cells[k], local);
+          scatter(cells[k], local, K, F, homogeneous, assemble_matrix);
+        }
+      }
+    }
+  }
+  // Face terms are few and cheap: serial.
+  LocalSystem local;
+  for (const auto& term : face_terms)
+    for (const auto& face : *term.faces) {
+      local.matrix.setZero(n_local, n_local);
+      local.vector.setZero(n_local);
+      term.kernel(face, local);
+      scatter(face.cell, local, K, F, homogeneous, assemble_matrix);
+    }
+}
+
+}  // namespace rsw::fem

@@ -1,0 +1,67 @@
+// Meshes of a spot-weld stack-up: one quadtree mesh per body (upper electrode, each
+// sheet top to bottom, lower electrode), merged into one fem::Mesh whose bodies share
+// no nodes, with named boundaries and named contact interfaces.
+//
+// Each body is a quadtree on a grid of base cells mapped onto the body:
+// - A sheet is a rectangle [0, sheet_radius] x [z_bottom, z_top]; its radial grid
+//   has lines at the electrode face radii so that the initial contact zone of the
+//   sheet and of the electrode face share their radial node positions.
+// - An electrode is the region between its face profile z_low(ρ) (dome, then flank)
+//   and its end face, minus the cooling bore. The grid lives in (ρ, ζ), ζ the axial
+//   distance from the face apex, and is mapped by
+//       ζ' = z_low(ρ) + ζ (1 - z_low(ρ)/ζ_b)   for ζ <= ζ_b,   ζ' = ζ above,
+//   with ζ_b the bore bottom (or the electrode length without a bore). Nodes on
+//   ζ = 0 land exactly on the dome and the cone; ρ = cap radius is the cylindrical
+//   side; the bore walls are grid lines. The map is smooth in the geometry, so the
+//   mesh moves continuously when a dimension changes (no staircase snapping).
+// Grid spacing: every segment between breakpoints (axis, face radius, bore radius,
+// cap radius; face, bore bottom, end) is divided into round(length / base_size)
+// equal cells, so the spacing is the base size up to the rounding of each segment.
+// Refinement: a cell is split while its physical bounding box overlaps a refinement
+// box of higher level; each body is then 2:1 balanced.
+//
+// Names: bodies "upper_electrode", "sheet_1".."sheet_n", "lower_electrode";
+// electrode boundaries "axis", "contact_face" (the dome), "flank", "side",
+// "end_face", "cooling_bore"; sheet boundaries "axis", "top", "bottom", "edge";
+// interfaces "es_upper" (upper_electrode.contact_face, sheet_1.top),
+// "ss_1_2", "ss_2_3" (sheet_k.bottom, sheet_k+1.top), "es_lower"
+// (sheet_n.bottom, lower_electrode.contact_face). The mesh depends on geometry and
+// mesh settings only, never on model parameters.
+#pragma once
+
+#include "fem/mesh.hpp"
+#include "meshes/weld_geometry.hpp"
+
+#include <vector>
+
+namespace rsw::meshes {
+
+// Axial distance of the electrode surface from the face apex at radius r
+// (0 <= r <= cap radius): dome sagitta, then the cone flank.
+double electrode_profile(const ElectrodeGeometry& g, double r);
+
+// Exact volume of the electrode (dome, flank, cylinder, minus the bore), m^3.
+double electrode_volume(const ElectrodeGeometry& g);
+
+// Throws std::invalid_argument naming the offending dimension if the electrode
+// cannot be meshed (face wider than the cap, flank reaching the bore bottom, ...).
+void check_electrode(const ElectrodeGeometry& g, const char* which);
+
+// The weld-zone refinement box and the extra boxes, in stack coordinates.
+std::vector<RefinementBox> refinement_boxes(const StackGeometry& stack, const MeshSettings& settings);
+
+// One electrode: apex at (0, z_apex), body extending towards +z (direction = +1,
+// upper) or -z (direction = -1, lower).
+fem::Mesh electrode_mesh(const ElectrodeGeometry& g, const std::string& body, double z_apex, int direction,
+                         const MeshSettings& settings, const std::vector<RefinementBox>& boxes);
+
+// One sheet occupying z in [z_bottom, z_top]; `radial_breaks` are extra radii at
+// which the radial grid must have lines.
+fem::Mesh sheet_mesh(const Sheet& sheet, double sheet_radius, double z_bottom, double z_top,
+                     const std::vector<double>& radial_breaks, const MeshSettings& settings,
+                     const std::vector<RefinementBox>& boxes);
+
+// The whole stack-up: bodies, boundaries and interfaces as described above.
+fem::Mesh weld_mesh(const StackGeometry& stack, const MeshSettings& settings);
+
+}  // namespace rsw::meshes
