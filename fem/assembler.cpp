@@ -7,19 +7,26 @@
 
 namespace rsw::fem {
 
-Assembler::Assembler(const Mesh& mesh, const DofMap& dofs, const Constraints& constraints)
+Assembler::Assembler(const Mesh& mesh, const DofMap& dofs, const Constraints& constraints,
+                     const std::vector<std::vector<int>>& dof_groups)
     : mesh_(mesh), dofs_(dofs), constraints_(constraints) {
   if (!constraints.closed()) throw std::logic_error("Assembler: constraints must be closed");
   if (constraints.n_dofs() != dofs.n_dofs()) throw std::logic_error("Assembler: constraints and dof map differ in size");
   const int n_cells = mesh.n_cells();
   const int n = constraints.n_free();
 
-  cell_dofs_.resize(n_cells);
+  const int n_elements = n_cells + static_cast<int>(dof_groups.size());
+  element_dofs_.resize(n_elements);
+  for (int e = 0; e < n_cells; ++e) dofs.cell_dofs(mesh, e, element_dofs_[e]);
+  for (std::size_t g = 0; g < dof_groups.size(); ++g) {
+    for (int d : dof_groups[g])
+      if (d < 0 || d >= dofs.n_dofs()) throw std::out_of_range("Assembler: coupling group dof out of range");
+    element_dofs_[n_cells + g] = dof_groups[g];
+  }
   std::vector<Eigen::Triplet<double>> triplets;
-  for (int e = 0; e < n_cells; ++e) {
-    dofs.cell_dofs(mesh, e, cell_dofs_[e]);
+  for (int e = 0; e < n_elements; ++e) {
     std::vector<int> reduced;
-    for (int d : cell_dofs_[e]) {
+    for (int d : element_dofs_[e]) {
       auto [b, end] = constraints.expansion(d);
       for (auto it = b; it != end; ++it) reduced.push_back(it->dof);
     }
@@ -35,10 +42,10 @@ Assembler::Assembler(const Mesh& mesh, const DofMap& dofs, const Constraints& co
   // Position of every contribution, in the exact order scatter() visits them.
   const int* outer = pattern_.outerIndexPtr();
   const int* inner = pattern_.innerIndexPtr();
-  position_start_.resize(n_cells + 1);
-  for (int e = 0; e < n_cells; ++e) {
+  position_start_.resize(n_elements + 1);
+  for (int e = 0; e < n_elements; ++e) {
     position_start_[e] = static_cast<int>(positions_.size());
-    const auto& cd = cell_dofs_[e];
+    const auto& cd = element_dofs_[e];
     for (std::size_t b = 0; b < cd.size(); ++b) {
       auto [qb, qe] = constraints.expansion(cd[b]);
       for (auto q = qb; q != qe; ++q)
@@ -53,7 +60,7 @@ Assembler::Assembler(const Mesh& mesh, const DofMap& dofs, const Constraints& co
         }
     }
   }
-  position_start_[n_cells] = static_cast<int>(positions_.size());
+  position_start_[n_elements] = static_cast<int>(positions_.size());
 
   // Greedy colouring: cells sharing a free dof get different colours.
   std::vector<std::uint64_t> used(n, 0);
@@ -62,7 +69,7 @@ Assembler::Assembler(const Mesh& mesh, const DofMap& dofs, const Constraints& co
   for (int e = 0; e < n_cells; ++e) {
     std::uint64_t forbidden = 0;
     std::vector<int> reduced;
-    for (int d : cell_dofs_[e]) {
+    for (int d : element_dofs_[e]) {
       auto [b, end] = constraints.expansion(d);
       for (auto it = b; it != end; ++it) {
         forbidden |= used[it->dof];
@@ -80,12 +87,12 @@ Assembler::Assembler(const Mesh& mesh, const DofMap& dofs, const Constraints& co
   for (int e = 0; e < n_cells; ++e) colours_[colour[e]].push_back(e);
 }
 
-void Assembler::scatter(int cell, const LocalSystem& local, SparseMatrix& K, Eigen::VectorXd& F,
+void Assembler::scatter(int element, const LocalSystem& local, SparseMatrix& K, Eigen::VectorXd& F,
                         bool homogeneous, bool assemble_matrix) const {
-  const auto& cd = cell_dofs_[cell];
+  const auto& cd = element_dofs_[element];
   const int n_local = static_cast<int>(cd.size());
   double* values = K.valuePtr();
-  const int* pos = positions_.data() + position_start_[cell];
+  const int* pos = positions_.data() + position_start_[element];
   // Vector part: F_e - K_e g for inhomogeneous constraints.
   Eigen::VectorXd rhs = local.vector;
   if (!homogeneous) {
@@ -110,8 +117,9 @@ void Assembler::scatter(int cell, const LocalSystem& local, SparseMatrix& K, Eig
   }
 }
 
-void Assembler::assemble(const CellKernel& cell_kernel, const std::vector<FaceTerm>& face_terms,
-                         SparseMatrix& K, Eigen::VectorXd& F, bool homogeneous, bool assemble_matrix) const {
+void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F, bool homogeneous,
+                         bool assemble_matrix) const {
+  const CellKernel& cell_kernel = terms.cells;
   if (assemble_matrix) {
     if (K.rows() != pattern_.rows() || K.nonZeros() != pattern_.nonZeros()) K = pattern_;
     std::fill(K.valuePtr(), K.valuePtr() + K.nonZeros(), 0.0);
@@ -135,15 +143,25 @@ void Assembler::assemble(const CellKernel& cell_kernel, const std::vector<FaceTe
       }
     }
   }
-  // Face terms are few and cheap: serial.
+  // Face terms and coupling groups are few and cheap: serial.
   LocalSystem local;
-  for (const auto& term : face_terms)
+  for (const auto& term : terms.faces)
     for (const auto& face : *term.faces) {
       local.matrix.setZero(n_local, n_local);
       local.vector.setZero(n_local);
       term.kernel(face, local);
       scatter(face.cell, local, K, F, homogeneous, assemble_matrix);
     }
+  if (terms.groups) {
+    const int n_cells = mesh_.n_cells();
+    for (int g = 0; g < n_groups(); ++g) {
+      const int n = static_cast<int>(element_dofs_[n_cells + g].size());
+      local.matrix.setZero(n, n);
+      local.vector.setZero(n);
+      terms.groups(g, local);
+      scatter(n_cells + g, local, K, F, homogeneous, assemble_matrix);
+    }
+  }
 }
 
 }  // namespace rsw::fem

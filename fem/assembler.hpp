@@ -35,14 +35,25 @@ class Assembler {
  public:
   using CellKernel = std::function<void(int cell, LocalSystem& local)>;
   using FaceKernel = std::function<void(const BoundaryFace& face, LocalSystem& local)>;
+  // Couplings beyond cells, e.g. contact across two bodies: group g couples the dofs
+  // groups[g] (in that order: the local system has groups[g].size() rows).
+  using GroupKernel = std::function<void(int group, LocalSystem& local)>;
   struct FaceTerm {
     const std::vector<BoundaryFace>* faces;
     FaceKernel kernel;
   };
+  struct Terms {
+    CellKernel cells;
+    std::vector<FaceTerm> faces;
+    GroupKernel groups;
+  };
 
   // The constraints must be closed; they may later change their inhomogeneities
-  // (and be closed again) but not their structure.
-  Assembler(const Mesh& mesh, const DofMap& dofs, const Constraints& constraints);
+  // (and be closed again) but not their structure. `dof_groups` lists the dofs of
+  // every coupling group; the pattern covers them too.
+  Assembler(const Mesh& mesh, const DofMap& dofs, const Constraints& constraints,
+            const std::vector<std::vector<int>>& dof_groups = {});
+  int n_groups() const { return static_cast<int>(element_dofs_.size()) - mesh_.n_cells(); }
 
   int n_free() const { return constraints_.n_free(); }
   int n_colours() const { return static_cast<int>(colours_.size()); }
@@ -50,25 +61,30 @@ class Assembler {
   // Assembles K_red and F_red. `cell_kernel` may be empty (face terms only) and the
   // matrix may be skipped (assemble_matrix = false, e.g. for a residual check).
   // homogeneous = true ignores the constraint values g (Newton increments).
+  void assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F, bool homogeneous = false,
+                bool assemble_matrix = true) const;
   void assemble(const CellKernel& cell_kernel, const std::vector<FaceTerm>& face_terms,
                 SparseMatrix& K, Eigen::VectorXd& F, bool homogeneous = false,
-                bool assemble_matrix = true) const;
+                bool assemble_matrix = true) const {
+    assemble(Terms{cell_kernel, face_terms, {}}, K, F, homogeneous, assemble_matrix);
+  }
   void assemble(const CellKernel& cell_kernel, SparseMatrix& K, Eigen::VectorXd& F) const {
-    assemble(cell_kernel, {}, K, F);
+    assemble(Terms{cell_kernel, {}, {}}, K, F);
   }
 
  private:
-  void scatter(int cell, const LocalSystem& local, SparseMatrix& K, Eigen::VectorXd& F,
+  // Element e: cells first (e < n_cells), then coupling groups.
+  void scatter(int element, const LocalSystem& local, SparseMatrix& K, Eigen::VectorXd& F,
                bool homogeneous, bool assemble_matrix) const;
 
   const Mesh& mesh_;
   const DofMap& dofs_;
   const Constraints& constraints_;
   SparseMatrix pattern_;
-  std::vector<std::vector<int>> cell_dofs_;
-  std::vector<int> position_start_;  // per cell, into positions_
+  std::vector<std::vector<int>> element_dofs_;
+  std::vector<int> position_start_;  // per element, into positions_
   std::vector<int> positions_;       // value index of every (a, p, b, q) contribution
-  std::vector<std::vector<int>> colours_;
+  std::vector<std::vector<int>> colours_;  // cells only
 };
 
 }  // namespace rsw::fem

@@ -30,6 +30,13 @@ void Constraints::add_line(int dof, const std::vector<Entry>& entries, double in
   closed_ = false;
 }
 
+void Constraints::set_value(int dof, double value) {
+  if (dof < 0 || dof >= n_dofs_ || line_of_[dof] < 0 || !lines_[line_of_[dof]].entries.empty())
+    throw std::logic_error("Constraints::set_value: dof " + std::to_string(dof) + " is not a fixed-value line");
+  lines_[line_of_[dof]].inhomogeneity = value;
+  closed_ = false;
+}
+
 void Constraints::add_hanging_nodes(const Mesh& mesh, const DofMap& dofs) {
   for (const auto& h : mesh.hanging_nodes)
     for (int c = 0; c < dofs.n_components(); ++c)

@@ -50,6 +50,9 @@ class Constraints {
     }
   }
 
+  // Changes the value b of a fixed-value line (x_dof = value); close() again afterwards.
+  void set_value(int dof, double value);
+
   // Resolves chains and numbers the free dofs. Must be called before the queries below.
   void close();
   bool closed() const { return closed_; }

@@ -5,8 +5,8 @@
 
 namespace rsw::fem {
 
-DofMap::DofMap(const Mesh& mesh, int n_components)
-    : n_components_(n_components), n_dofs_(n_components * mesh.n_nodes()) {
+DofMap::DofMap(const Mesh& mesh, int n_components, int n_extra)
+    : n_components_(n_components), n_extra_(n_extra), n_dofs_(n_components * mesh.n_nodes() + n_extra) {
   if (n_components < 1 || n_components > 2)
     throw std::invalid_argument("DofMap: n_components must be 1 or 2");
 }

@@ -47,11 +47,15 @@ double flank_slope(const ElectrodeGeometry& g) { return 1.0 / std::tan(0.5 * g.c
 
 double bore_bottom(const ElectrodeGeometry& g) { return g.bore_diameter > 0 ? g.bore_depth : g.length; }
 
-// Refinement level asked for a physical box.
+// Refinement level asked for a physical box. Boxes must overlap a cell by more than
+// a nanometre: a box edge that coincides with a grid line (4.5 mm = 18 x 0.25 mm)
+// must not refine the next cell because of rounding in the unit conversion.
 int target_level(const std::vector<RefinementBox>& boxes, double r0, double r1, double z0, double z1) {
+  constexpr double tol = 1e-9;  // m
   int level = 0;
   for (const auto& b : boxes)
-    if (b.r_min < r1 && r0 < b.r_max && b.z_min < z1 && z0 < b.z_max) level = std::max(level, b.levels);
+    if (b.r_min < r1 - tol && r0 < b.r_max - tol && b.z_min < z1 - tol && z0 < b.z_max - tol)
+      level = std::max(level, b.levels);
   return level;
 }
 
@@ -203,7 +207,7 @@ fem::Mesh weld_mesh(const StackGeometry& stack, const MeshSettings& settings) {
   for (std::size_t k = 0; k + 1 < sheets.size(); ++k)
     mesh.interfaces["ss_" + std::to_string(k + 1) + "_" + std::to_string(k + 2)] = {sheets[k].name + ".bottom",
                                                                                    sheets[k + 1].name + ".top"};
-  mesh.interfaces["es_lower"] = {sheets.back().name + ".bottom", "lower_electrode.contact_face"};
+  mesh.interfaces["es_lower"] = {"lower_electrode.contact_face", sheets.back().name + ".bottom"};
   return mesh;
 }
 

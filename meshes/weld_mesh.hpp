@@ -25,7 +25,10 @@
 // "end_face", "cooling_bore"; sheet boundaries "axis", "top", "bottom", "edge";
 // interfaces "es_upper" (upper_electrode.contact_face, sheet_1.top),
 // "ss_1_2", "ss_2_3" (sheet_k.bottom, sheet_k+1.top), "es_lower"
-// (sheet_n.bottom, lower_electrode.contact_face). The mesh depends on geometry and
+// (lower_electrode.contact_face, sheet_n.bottom). The first surface of a pair is the
+// slave side of contact (its quadrature points are projected onto the second), so
+// both electrode interfaces are discretised alike and a symmetric stack stays
+// symmetric. The mesh depends on geometry and
 // mesh settings only, never on model parameters.
 #pragma once
 

@@ -111,7 +111,7 @@ TEST(WeldMesh, InterfacesPairTheTouchingSurfaces) {
   EXPECT_EQ(mesh.interfaces.at("es_upper").first, "upper_electrode.contact_face");
   EXPECT_EQ(mesh.interfaces.at("es_upper").second, "sheet_1.top");
   EXPECT_EQ(mesh.interfaces.at("ss_1_2").second, "sheet_2.top");
-  EXPECT_EQ(mesh.interfaces.at("es_lower").second, "lower_electrode.contact_face");
+  EXPECT_EQ(mesh.interfaces.at("es_lower").first, "lower_electrode.contact_face");
   // At r = 0 each contact pair starts touching.
   for (const auto& [name, pair] : mesh.interfaces) {
     double z1 = 1e9, z2 = -1e9;

@@ -1,0 +1,88 @@
+// The rsw program as a user runs it: `rsw mesh` writes files that VTK reads back and
+// reports the weld-zone element size; bad input exits non-zero with a message naming
+// the key and what is allowed, and writes nothing.
+#include "fem/vtk_output.hpp"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+namespace fs = std::filesystem;
+
+namespace {
+struct CommandResult {
+  int status = -1;
+  std::string output;  // stdout and stderr
+};
+
+CommandResult run_rsw(const std::string& args) {
+  CommandResult r;
+  const std::string cmd = std::string(RSW_BINARY) + " " + args + " 2>&1";
+  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
+  std::array<char, 4096> buf;
+  while (fgets(buf.data(), buf.size(), pipe.get())) r.output += buf.data();
+  r.status = WEXITSTATUS(pclose(pipe.release()));
+  return r;
+}
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("rsw_cli_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  return d;
+}
+
+const std::string paper_case = std::string(RSW_SOURCE_DIR) + "/validation/paper_case/weld.yaml";
+}  // namespace
+
+TEST(RswMesh, WritesMeshThatVtkReadsBackAndReportsWeldZoneSize) {
+  const fs::path dir = fresh_dir("mesh");
+  const CommandResult r = run_rsw("mesh " + paper_case + " -o " + dir.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("nominal edge 0.0625 mm"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("sheet_1              1152 cells, edges 0.0625..0.0625 mm"), std::string::npos) << r.output;
+
+  const auto data = rsw::fem::read_vtm(dir / "mesh.vtm");
+  int n_cells = 0;
+  for (const char* body : {"upper_electrode", "sheet_1", "sheet_2", "lower_electrode"}) {
+    const auto& block = data.block(body);
+    n_cells += block.n_cells;
+    const auto& level = block.cell_array("level");
+    for (int i = 0; i < level.n_tuples(); ++i) EXPECT_LE(level.at(i), 2);
+    EXPECT_GT(data.block(std::string(body) + "_boundaries").n_cells, 0);
+  }
+  EXPECT_NE(r.output.find("all                   " + std::to_string(n_cells)), std::string::npos) << r.output;
+  fs::remove_all(dir);
+}
+
+TEST(RswMesh, SetOverrideChangesTheMesh) {
+  const fs::path dir = fresh_dir("set");
+  const CommandResult r = run_rsw("mesh " + paper_case + " -o " + dir.string() + " --set mesh.weld_zone.levels=1");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("nominal edge 0.1250 mm"), std::string::npos) << r.output;
+  fs::remove_all(dir);
+}
+
+TEST(RswMesh, OutOfRangeOverrideExitsWithKeyAndRangeAndWritesNothing) {
+  const fs::path dir = fresh_dir("bad");
+  const CommandResult r = run_rsw("mesh " + paper_case + " -o " + dir.string() + " --set mesh.weld_zone.levels=9");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("mesh.weld_zone.levels"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("allowed"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir));
+}
+
+TEST(RswMesh, MissingCaseFileIsAnError) {
+  const CommandResult r = run_rsw("mesh /nonexistent/weld.yaml");
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find("/nonexistent/weld.yaml"), std::string::npos) << r.output;
+}
+
+TEST(RswConfig, SchemaCommandDocumentsListItemKeys) {
+  const CommandResult r = run_rsw("config schema --format markdown");
+  ASSERT_EQ(r.status, 0);
+  EXPECT_NE(r.output.find("stack.sheets[].thickness"), std::string::npos);
+}
