@@ -62,29 +62,49 @@ Assembler::Assembler(const Mesh& mesh, const DofMap& dofs, const Constraints& co
   }
   position_start_[n_elements] = static_cast<int>(positions_.size());
 
-  // Greedy colouring: cells sharing a free dof get different colours.
+  // Greedy colouring: cells sharing a free dof get different colours. Cells touching
+  // a hub dof (one shared by many cells, such as the rigid motion of an electrode end
+  // face) are assembled serially after the colours instead.
+  std::vector<int> n_cells_of(n, 0);
+  for (int e = 0; e < n_cells; ++e) {
+    std::vector<int> reduced;
+    for (int d : element_dofs_[e]) {
+      auto [b, end] = constraints.expansion(d);
+      for (auto it = b; it != end; ++it) reduced.push_back(it->dof);
+    }
+    std::sort(reduced.begin(), reduced.end());
+    reduced.erase(std::unique(reduced.begin(), reduced.end()), reduced.end());
+    for (int p : reduced) ++n_cells_of[p];
+  }
+  constexpr int hub = 16;
   std::vector<std::uint64_t> used(n, 0);
-  std::vector<int> colour(n_cells, 0);
+  std::vector<int> colour(n_cells, -1);
   int n_colours = 0;
   for (int e = 0; e < n_cells; ++e) {
     std::uint64_t forbidden = 0;
     std::vector<int> reduced;
+    bool touches_hub = false;
     for (int d : element_dofs_[e]) {
       auto [b, end] = constraints.expansion(d);
       for (auto it = b; it != end; ++it) {
         forbidden |= used[it->dof];
         reduced.push_back(it->dof);
+        touches_hub = touches_hub || n_cells_of[it->dof] > hub;
       }
     }
     int c = 0;
     while (c < 64 && (forbidden >> c & 1u)) ++c;
-    if (c == 64) throw std::runtime_error("Assembler: more than 64 colours needed");
+    if (touches_hub || c == 64) {
+      serial_cells_.push_back(e);
+      continue;
+    }
     colour[e] = c;
     for (int p : reduced) used[p] |= std::uint64_t{1} << c;
     n_colours = std::max(n_colours, c + 1);
   }
   colours_.assign(n_colours, {});
-  for (int e = 0; e < n_cells; ++e) colours_[colour[e]].push_back(e);
+  for (int e = 0; e < n_cells; ++e)
+    if (colour[e] >= 0) colours_[colour[e]].push_back(e);
 }
 
 void Assembler::scatter(int element, const LocalSystem& local, SparseMatrix& K, Eigen::VectorXd& F,
@@ -143,8 +163,15 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
       }
     }
   }
-  // Face terms and coupling groups are few and cheap: serial.
+  // Cells on hub dofs, face terms and coupling groups: serial.
   LocalSystem local;
+  if (cell_kernel)
+    for (int e : serial_cells_) {
+      local.matrix.setZero(n_local, n_local);
+      local.vector.setZero(n_local);
+      cell_kernel(e, local);
+      scatter(e, local, K, F, homogeneous, assemble_matrix);
+    }
   for (const auto& term : terms.faces)
     for (const auto& face : *term.faces) {
       local.matrix.setZero(n_local, n_local);

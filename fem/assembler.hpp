@@ -9,7 +9,9 @@
 // Newton iteration and time step) only zeroes and accumulates values. Cells are
 // coloured so that no two cells of one colour share a free dof; each colour is
 // assembled in parallel with OpenMP (kernels must then be thread-safe: keep scratch
-// such as CellValues in thread_local storage or build it inside the kernel).
+// such as CellValues in thread_local storage or build it inside the kernel). Cells
+// on a dof shared by more than 16 cells (a "hub", e.g. a rigid end face's motion)
+// are assembled serially at the end.
 #pragma once
 
 #include "fem/constraints.hpp"
@@ -84,7 +86,8 @@ class Assembler {
   std::vector<std::vector<int>> element_dofs_;
   std::vector<int> position_start_;  // per element, into positions_
   std::vector<int> positions_;       // value index of every (a, p, b, q) contribution
-  std::vector<std::vector<int>> colours_;  // cells only
+  std::vector<std::vector<int>> colours_;  // cells assembled in parallel, colour by colour
+  std::vector<int> serial_cells_;          // cells on hub dofs, assembled serially
 };
 
 }  // namespace rsw::fem

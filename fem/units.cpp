@@ -133,7 +133,7 @@ bool names_angle(const std::string& normalised_unit) {
 UnitPtr parse_locked(const std::string& normalised_unit) {
   // A unit starting with a number ("1 2", "1.0.5 mm") is a typo, not a scale factor.
   const char first = normalised_unit.empty() ? ' ' : normalised_unit[0];
-  if (normalised_unit != "1" &&
+  if (normalised_unit != "1" && normalised_unit.rfind("1/", 0) != 0 &&
       (std::isdigit(static_cast<unsigned char>(first)) != 0 || first == '.' ||
        first == '+' || first == '-')) {
     return UnitPtr(nullptr, &ut_free);
@@ -142,9 +142,19 @@ UnitPtr parse_locked(const std::string& normalised_unit) {
                  &ut_free);
 }
 
+// UDUNITS calls reciprocal units convertible (Hz and s, K and 1/K); a value may only
+// change units within one dimension, i.e. when from/to is dimensionless.
+// Caller holds the mutex.
+bool same_dimension_locked(const ut_unit* a, const ut_unit* b) {
+  if (ut_are_convertible(a, b) == 0) return false;
+  UnitPtr ratio(ut_divide(a, b), &ut_free);
+  UnitPtr one(ut_get_dimensionless_unit_one(unit_system().system), &ut_free);
+  return ratio && ut_are_convertible(ratio.get(), one.get()) != 0;
+}
+
 bool convertible_locked(const ut_unit* from, const std::string& from_text,
                         const ut_unit* to, const std::string& to_text) {
-  if (ut_are_convertible(from, to) == 0) return false;
+  if (!same_dimension_locked(from, to)) return false;
   return names_angle(from_text) == names_angle(to_text);
 }
 
@@ -187,7 +197,7 @@ std::string kind_locked(const std::string& normalised_unit) {
   }
   for (const auto& [reference, name] : kinds) {
     const UnitPtr candidate = parse_locked(reference);
-    if (candidate && ut_are_convertible(unit.get(), candidate.get()) != 0) return name;
+    if (candidate && same_dimension_locked(unit.get(), candidate.get())) return name;
   }
   return "quantity in " + normalised_unit;
 }

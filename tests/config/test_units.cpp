@@ -171,3 +171,14 @@ TEST(UnitsDeathTest, DatabasePathComesFromEnvironment) {
 
 }  // namespace
 }  // namespace rsw::fem
+
+// UDUNITS treats reciprocal units as convertible (it would turn 2 Hz into 0.5 s);
+// a config value may only change units within one dimension.
+TEST(Units, ReciprocalUnitsDoNotConvert) {
+  EXPECT_FALSE(rsw::fem::units_convertible("Hz", "s"));
+  EXPECT_FALSE(rsw::fem::units_convertible("K", "1/K"));
+  EXPECT_FALSE(rsw::fem::units_convertible("m", "m^-1"));
+  EXPECT_TRUE(rsw::fem::is_known_unit("1/K"));
+  EXPECT_TRUE(rsw::fem::units_convertible("1/K", "K^-1"));
+  EXPECT_THROW(rsw::fem::convert_units(2.0, "Hz", "s"), std::runtime_error);
+}

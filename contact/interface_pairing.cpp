@@ -1,0 +1,139 @@
+// Gauss-point-to-segment pairing; see interface_pairing.hpp.
+#include "contact/interface_pairing.hpp"
+
+#include "fem/fe_values.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace rsw::contact {
+
+namespace {
+Eigen::Vector2d outward_normal(const fem::Point& a, const fem::Point& b) {
+  const fem::Point t = b - a;  // counter-clockwise in the cell: outward is (t_z, -t_r)
+  return Eigen::Vector2d(t.y(), -t.x()).normalized();
+}
+}  // namespace
+
+InterfacePairing::InterfacePairing(const fem::Mesh& mesh, const std::string& name, int n_gauss,
+                                   double search_margin)
+    : mesh_(mesh), name_(name), n_gauss_(n_gauss) {
+  auto it = mesh.interfaces.find(name);
+  if (it == mesh.interfaces.end()) throw std::out_of_range("unknown interface '" + name + "'");
+  slave_ = it->second.first;
+  master_ = it->second.second;
+  for (const auto& f : mesh.boundary(slave_)) slave_faces_.push_back(mesh.face_nodes(f));
+  for (const auto& f : mesh.boundary(master_)) master_faces_.push_back(mesh.face_nodes(f));
+
+  for (const auto& mf : master_faces_) {
+    master_nodes_.push_back(mf[0]);
+    master_nodes_.push_back(mf[1]);
+  }
+  std::sort(master_nodes_.begin(), master_nodes_.end());
+  master_nodes_.erase(std::unique(master_nodes_.begin(), master_nodes_.end()), master_nodes_.end());
+  master_faces_of_node_.assign(master_nodes_.size(), {});
+  for (std::size_t f = 0; f < master_faces_.size(); ++f)
+    for (int n : master_faces_[f]) {
+      auto pos = std::lower_bound(master_nodes_.begin(), master_nodes_.end(), n) - master_nodes_.begin();
+      master_faces_of_node_[pos].push_back(static_cast<int>(f));
+    }
+
+  candidates_.resize(slave_faces_.size());
+  coupling_nodes_.resize(slave_faces_.size());
+  for (std::size_t s = 0; s < slave_faces_.size(); ++s) {
+    const double r0 = std::min(mesh.nodes[slave_faces_[s][0]].x(), mesh.nodes[slave_faces_[s][1]].x()) - search_margin;
+    const double r1 = std::max(mesh.nodes[slave_faces_[s][0]].x(), mesh.nodes[slave_faces_[s][1]].x()) + search_margin;
+    std::vector<int> nodes;
+    for (std::size_t m = 0; m < master_faces_.size(); ++m) {
+      const double m0 = std::min(mesh.nodes[master_faces_[m][0]].x(), mesh.nodes[master_faces_[m][1]].x());
+      const double m1 = std::max(mesh.nodes[master_faces_[m][0]].x(), mesh.nodes[master_faces_[m][1]].x());
+      if (m1 < r0 || m0 > r1) continue;
+      candidates_[s].push_back(static_cast<int>(m));
+      nodes.push_back(master_faces_[m][0]);
+      nodes.push_back(master_faces_[m][1]);
+    }
+    std::sort(nodes.begin(), nodes.end());
+    nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+    coupling_nodes_[s] = {slave_faces_[s][0], slave_faces_[s][1]};
+    coupling_nodes_[s].insert(coupling_nodes_[s].end(), nodes.begin(), nodes.end());
+  }
+
+  const auto rule = fem::gauss_legendre(n_gauss);
+  points_.resize(slave_faces_.size() * n_gauss);
+  for (std::size_t s = 0; s < slave_faces_.size(); ++s)
+    for (int q = 0; q < n_gauss; ++q) {
+      ContactPoint& p = points_[s * n_gauss + q];
+      p.slave_face = static_cast<int>(s);
+      p.slave_nodes = slave_faces_[s];
+      p.slave_weights = {0.5 * (1 - rule.points[q]), 0.5 * (1 + rule.points[q])};
+    }
+  update(mesh.nodes);
+  for (auto& p : points_) p.reference_position = p.position;
+}
+
+int InterfacePairing::local_index(int slave_face, int node) const {
+  const auto& nodes = coupling_nodes_[slave_face];
+  auto it = std::find(nodes.begin(), nodes.end(), node);
+  return it == nodes.end() ? -1 : static_cast<int>(it - nodes.begin());
+}
+
+bool InterfacePairing::update(const std::vector<fem::Point>& x) {
+  const auto rule = fem::gauss_legendre(n_gauss_);
+  bool within = true;
+  for (auto& p : points_) {
+    const fem::Point& a = x[p.slave_nodes[0]];
+    const fem::Point& b = x[p.slave_nodes[1]];
+    p.position = p.slave_weights[0] * a + p.slave_weights[1] * b;
+    const int q = static_cast<int>(&p - points_.data()) % n_gauss_;
+    p.area = rule.weights[q] * 0.5 * (b - a).norm() * 2.0 * M_PI * p.position.x();
+
+    // Closest point over all master faces (few hundred at most; a brute-force search
+    // also tells whether the winner is a candidate).
+    double best = 1e300;
+    int best_face = -1;
+    double best_eta = 0, best_eta_raw = 0;
+    for (std::size_t m = 0; m < master_faces_.size(); ++m) {
+      const fem::Point& m1 = x[master_faces_[m][0]];
+      const fem::Point& m2 = x[master_faces_[m][1]];
+      const fem::Point t = m2 - m1;
+      const double eta_raw = (p.position - m1).dot(t) / t.squaredNorm();
+      const double eta = std::clamp(eta_raw, 0.0, 1.0);
+      const double d = (p.position - (m1 + eta * t)).squaredNorm();
+      if (d < best - 1e-30) {
+        best = d;
+        best_face = static_cast<int>(m);
+        best_eta = eta;
+        best_eta_raw = eta_raw;
+      }
+    }
+    p.paired = false;
+    p.master_face = -1;
+    if (best_face < 0) continue;
+    const auto& mf = master_faces_[best_face];
+    // Clamped to a node: the free end of the master surface means no partner.
+    Eigen::Vector2d normal = outward_normal(x[mf[0]], x[mf[1]]);
+    if (best_eta_raw < 0 || best_eta_raw > 1) {
+      const int node = mf[best_eta_raw < 0 ? 0 : 1];
+      const auto pos = std::lower_bound(master_nodes_.begin(), master_nodes_.end(), node) - master_nodes_.begin();
+      const auto& faces = master_faces_of_node_[pos];
+      if (faces.size() < 2) continue;
+      normal.setZero();
+      for (int f : faces) normal += outward_normal(x[master_faces_[f][0]], x[master_faces_[f][1]]);
+      normal.normalize();
+    }
+    p.paired = true;
+    p.master_face = best_face;
+    p.master_nodes = mf;
+    p.master_weights = {1 - best_eta, best_eta};
+    p.normal = normal;
+    p.tangent = Eigen::Vector2d(normal.y(), -normal.x());
+    const fem::Point xm = (1 - best_eta) * x[mf[0]] + best_eta * x[mf[1]];
+    p.gap = (p.position - xm).dot(normal);
+    const auto& cand = candidates_[p.slave_face];
+    if (std::find(cand.begin(), cand.end(), best_face) == cand.end()) within = false;
+  }
+  return within;
+}
+
+}  // namespace rsw::contact

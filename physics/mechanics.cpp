@@ -1,0 +1,533 @@
+// Mechanics of the stack: B̄ elements with J2 plasticity, penalty contact with
+// friction, Newton with line search; see mechanics.hpp.
+#include "physics/mechanics.hpp"
+
+#include "fem/fe_values.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <stdexcept>
+
+namespace rsw::physics {
+
+namespace {
+using Vector4 = Eigen::Matrix<double, 4, 1>;
+using Matrix4 = Eigen::Matrix<double, 4, 4>;
+using Matrix48 = Eigen::Matrix<double, 4, 8>;
+constexpr double sqrt_half = 0.70710678118654752440;
+
+enum class Control { force, displacement };
+
+// C¹ penalty law: pressure and its slope -dp/dg for gap g (see mechanics.hpp).
+struct PenaltyPressure {
+  double pressure, stiffness;
+};
+PenaltyPressure penalty_pressure(double gap, double eps_n, double delta) {
+  if (gap >= 0) return {0.0, 0.0};
+  if (gap > -delta) return {eps_n * gap * gap / (2 * delta), -eps_n * gap / delta};
+  return {eps_n * (-gap - 0.5 * delta), eps_n};
+}
+}  // namespace
+
+struct Mechanics::Impl {
+  const fem::Mesh& mesh;
+  fem::Mesh current;  // configuration x_n at the start of the step
+  MechanicsSettings settings;
+  double initial_temperature;
+  std::vector<const materials::Material*> cell_material;
+  std::vector<double> foundation;  // per body, N/m^4 (0 for supported bodies)
+
+  fem::DofMap dofs;
+  int w_dof;
+  fem::Constraints force_constraints, displacement_constraints;
+  std::vector<contact::InterfacePairing> pairings;
+  std::vector<double> normal_penalty;  // per pairing, Pa/m
+  std::vector<std::pair<int, int>> groups;  // (pairing, slave face)
+  std::unique_ptr<fem::Assembler> force_assembler, displacement_assembler;
+  fem::LinearSolver force_solver, displacement_solver;
+
+  int n_q;
+  std::vector<Vector4> strain, trial_strain;  // per cell * n_q
+  std::vector<materials::J2State> state, trial_state;
+  std::vector<Vector4> trial_stress;
+  std::vector<std::vector<double>> tau, trial_tau;  // per pairing, per point
+
+  Eigen::VectorXd increment;    // Δu of the current step (full)
+  Eigen::VectorXd last_increment;  // Δu of the last committed step, for the predictor
+  double last_load_change = 0;     // ΔF or Δw of that step
+  Control last_control = Control::force;
+  double load_change = 0;          // ΔF or Δw of the current step
+  Eigen::VectorXd total;        // u since the start (full)
+  Eigen::VectorXd temperature;  // nodal, °C
+  Control control = Control::force;
+  double force = 0;             // applied (force control)
+  bool pairing_within = true;
+
+  Impl(const fem::Mesh& m, std::vector<const materials::Material*> body_materials, const MechanicsSettings& s,
+       double T0)
+      : mesh(m),
+        current(m),
+        settings(s),
+        initial_temperature(T0),
+        dofs(m, 2, 1),
+        w_dof(dofs.extra_dof(0)),
+        force_constraints(dofs.n_dofs()),
+        displacement_constraints(dofs.n_dofs()),
+        force_solver(s.friction_coefficient > 0 ? fem::SolverKind::umfpack : fem::SolverKind::cholmod),
+        displacement_solver(s.friction_coefficient > 0 ? fem::SolverKind::umfpack : fem::SolverKind::cholmod),
+        n_q(s.n_gauss * s.n_gauss) {
+    if (std::getenv("RSW_VERBOSE")) settings.verbose = true;
+    if (static_cast<int>(body_materials.size()) != mesh.n_bodies())
+      throw std::invalid_argument("Mechanics: one material per body expected");
+    for (int e = 0; e < mesh.n_cells(); ++e) cell_material.push_back(body_materials[mesh.cell_body[e]]);
+
+    // Bodies without a support of their own get the seating foundation κ = k / V.
+    std::vector<char> supported(mesh.n_bodies(), 0);
+    for (const auto* b : {&s.fixed_boundary, &s.loaded_boundary})
+      for (int n : mesh.boundary_nodes(*b)) supported[mesh.node_body[n]] = 1;
+    std::vector<double> volume(mesh.n_bodies(), 0.0);
+    fem::CellValues cv(s.n_gauss);
+    for (int e = 0; e < mesh.n_cells(); ++e) {
+      cv.reinit(mesh, e);
+      for (int q = 0; q < cv.n_q(); ++q) volume[mesh.cell_body[e]] += cv.JxW(q);
+    }
+    foundation.assign(mesh.n_bodies(), 0.0);
+    for (int b = 0; b < mesh.n_bodies(); ++b)
+      if (!supported[b]) foundation[b] = s.seating_stiffness / volume[b];
+
+    for (fem::Constraints* c : {&force_constraints, &displacement_constraints}) {
+      c->add_hanging_nodes(mesh, dofs);
+      for (const auto& [name, faces] : mesh.boundaries)
+        if (name.size() > 5 && name.compare(name.size() - 5, 5, ".axis") == 0)
+          c->constrain_boundary(mesh, dofs, name, 0, [](const fem::Point&) { return 0.0; });
+      const auto zero = [](const fem::Point&) { return 0.0; };
+      c->constrain_boundary(mesh, dofs, s.fixed_boundary, 1, zero);
+      if (s.clamp_radially) {
+        c->constrain_boundary(mesh, dofs, s.fixed_boundary, 0, zero);
+        c->constrain_boundary(mesh, dofs, s.loaded_boundary, 0, zero);
+      }
+      for (int n : mesh.boundary_nodes(s.loaded_boundary)) c->add_line(dofs.dof(n, 1), {{w_dof, 1.0}});
+    }
+    displacement_constraints.constrain(w_dof, 0.0);
+    force_constraints.close();
+    displacement_constraints.close();
+
+    std::vector<std::vector<int>> dof_groups;
+    for (const auto& [name, pair] : mesh.interfaces) {
+      pairings.emplace_back(mesh, name, s.n_gauss);
+      const auto& pairing = pairings.back();
+      // ε_N = factor · E / h: E of the stiffer side at room temperature, h the finest
+      // face on the interface. Fixed for the run (it never depends on the parameters).
+      const int b1 = mesh.cell_body[mesh.boundary(pair.first).front().cell];
+      const int b2 = mesh.cell_body[mesh.boundary(pair.second).front().cell];
+      const double E =
+          std::max(body_materials[b1]->youngs_modulus(T0).value, body_materials[b2]->youngs_modulus(T0).value);
+      double h = 1e300;
+      for (const auto* side : {&pair.first, &pair.second})
+        for (const auto& f : mesh.boundary(*side)) {
+          auto n = mesh.face_nodes(f);
+          h = std::min(h, (mesh.nodes[n[1]] - mesh.nodes[n[0]]).norm());
+        }
+      normal_penalty.push_back(s.penalty_factor * E / h);
+      const int p = static_cast<int>(pairings.size()) - 1;
+      for (int f = 0; f < pairing.n_slave_faces(); ++f) {
+        groups.emplace_back(p, f);
+        std::vector<int> g;
+        for (int n : pairing.coupling_nodes(f)) {
+          g.push_back(dofs.dof(n, 0));
+          g.push_back(dofs.dof(n, 1));
+        }
+        dof_groups.push_back(std::move(g));
+      }
+      tau.emplace_back(pairing.points().size(), 0.0);
+    }
+    trial_tau = tau;
+    force_assembler = std::make_unique<fem::Assembler>(mesh, dofs, force_constraints, dof_groups);
+    displacement_assembler = std::make_unique<fem::Assembler>(mesh, dofs, displacement_constraints, dof_groups);
+
+    const std::size_t n_points = static_cast<std::size_t>(mesh.n_cells()) * n_q;
+    strain.assign(n_points, Vector4::Zero());
+    trial_strain = strain;
+    state.assign(n_points, materials::J2State{});
+    trial_state = state;
+    trial_stress.assign(n_points, Vector4::Zero());
+    increment = Eigen::VectorXd::Zero(dofs.n_dofs());
+    last_increment = increment;
+    total = Eigen::VectorXd::Zero(dofs.n_dofs());
+    temperature = Eigen::VectorXd::Constant(mesh.n_nodes(), T0);
+  }
+
+  std::vector<fem::Point> trial_positions() const {
+    std::vector<fem::Point> x = current.nodes;
+    for (int n = 0; n < mesh.n_nodes(); ++n) x[n] += Eigen::Vector2d(increment[2 * n], increment[2 * n + 1]);
+    return x;
+  }
+
+  void cell_kernel(int e, fem::LocalSystem& local) {
+    fem::CellValues fv(settings.n_gauss);
+    fv.reinit(current, e);
+    const auto& c = mesh.cells[e];
+    const double kappa = control == Control::displacement ? foundation[mesh.cell_body[e]] : 0.0;
+    if (kappa > 0)  // seating foundation: body force -κ u_z towards the initial position
+      for (int q = 0; q < fv.n_q(); ++q)
+        for (int a = 0; a < 4; ++a) {
+          double uz = 0;
+          for (int b = 0; b < 4; ++b) uz += fv.N(q, b) * (total[2 * c[b] + 1] + increment[2 * c[b] + 1]);
+          local.vector[2 * a + 1] -= kappa * uz * fv.N(q, a) * fv.JxW(q);
+          for (int b = 0; b < 4; ++b) local.matrix(2 * a + 1, 2 * b + 1) += kappa * fv.N(q, a) * fv.N(q, b) * fv.JxW(q);
+        }
+    const materials::Material& mat = *cell_material[e];
+    Eigen::Matrix<double, 8, 1> du;
+    for (int a = 0; a < 4; ++a) du.segment<2>(2 * a) = increment.segment<2>(2 * c[a]);
+
+    // Cell average of the volumetric strain operator b = (∂N/∂r + N/r, ∂N/∂z).
+    Eigen::Matrix<double, 1, 8> b_mean = Eigen::Matrix<double, 1, 8>::Zero();
+    double volume = 0;
+    std::vector<Eigen::Matrix<double, 1, 8>> b(fv.n_q());
+    std::vector<Matrix48> B(fv.n_q());
+    for (int q = 0; q < fv.n_q(); ++q) {
+      const double r = fv.point(q).x();
+      B[q].setZero();
+      for (int a = 0; a < 4; ++a) {
+        const Eigen::Vector2d& g = fv.grad_N(q, a);
+        const double N = fv.N(q, a);
+        B[q](0, 2 * a) = g.x();                   // ε_rr = ∂u_r/∂r
+        B[q](1, 2 * a + 1) = g.y();               // ε_zz = ∂u_z/∂z
+        B[q](2, 2 * a) = N / r;                   // ε_θθ = u_r / r
+        B[q](3, 2 * a) = sqrt_half * g.y();       // √2 ε_rz = (∂u_r/∂z + ∂u_z/∂r)/√2
+        B[q](3, 2 * a + 1) = sqrt_half * g.x();
+        b[q](2 * a) = g.x() + N / r;
+        b[q](2 * a + 1) = g.y();
+      }
+      b_mean += b[q] * fv.JxW(q);
+      volume += fv.JxW(q);
+    }
+    b_mean /= volume;
+    const Vector4 m(1.0, 1.0, 1.0, 0.0);
+    for (int q = 0; q < fv.n_q(); ++q) {
+      const Matrix48 B_bar = B[q] + (m / 3.0) * (b_mean - b[q]);
+      double T = 0;
+      for (int a = 0; a < 4; ++a) T += fv.N(q, a) * temperature[c[a]];
+      const std::size_t k = static_cast<std::size_t>(e) * n_q + q;
+      const Vector4 eps = strain[k] + B_bar * du;
+      const auto result = materials::j2_update(mat, state[k], materials::j2_input(mat, eps, T, initial_temperature));
+      trial_strain[k] = eps;
+      trial_state[k] = result.state;
+      trial_stress[k] = result.stress;
+      local.matrix += B_bar.transpose() * result.tangent * B_bar * fv.JxW(q);  // ∫ B̄ᵀ D B̄ dV
+      local.vector -= B_bar.transpose() * result.stress * fv.JxW(q);           // -∫ B̄ᵀ σ dV
+    }
+  }
+
+  void group_kernel(int g, fem::LocalSystem& local) {
+    const auto [p, f] = groups[g];
+    const auto& pairing = pairings[p];
+    const double eps_n = normal_penalty[p];
+    const double eps_t = settings.tangential_penalty_ratio * eps_n;
+    const double mu = settings.friction_coefficient;
+    const int n_local = static_cast<int>(local.vector.size());
+    Eigen::VectorXd Nv(n_local), Tv(n_local), du(n_local);
+    const auto& nodes = pairing.coupling_nodes(f);
+    for (std::size_t i = 0; i < nodes.size(); ++i) du.segment<2>(2 * i) = increment.segment<2>(2 * nodes[i]);
+    for (int k = 0; k < pairing.n_gauss(); ++k) {
+      const int idx = f * pairing.n_gauss() + k;
+      const auto& pt = pairing.points()[idx];
+      trial_tau[p][idx] = 0.0;
+      if (!pt.paired || pt.gap >= 0) continue;
+      Nv.setZero();
+      Tv.setZero();
+      bool complete = true;
+      for (int s = 0; s < 2; ++s) {
+        const int ls = pairing.local_index(f, pt.slave_nodes[s]);
+        const int lm = pairing.local_index(f, pt.master_nodes[s]);
+        if (ls < 0 || lm < 0) {
+          complete = false;
+          break;
+        }
+        Nv.segment<2>(2 * ls) += pt.slave_weights[s] * pt.normal;
+        Tv.segment<2>(2 * ls) += pt.slave_weights[s] * pt.tangent;
+        Nv.segment<2>(2 * lm) -= pt.master_weights[s] * pt.normal;
+        Tv.segment<2>(2 * lm) -= pt.master_weights[s] * pt.tangent;
+      }
+      if (!complete) {
+        pairing_within = false;
+        continue;
+      }
+      const double A = pt.area;
+      const auto [pressure, k_n] = penalty_pressure(pt.gap, eps_n, settings.contact_smoothing);
+      local.vector += pressure * A * Nv;                     // contact force on both sides
+      local.matrix += k_n * A * Nv * Nv.transpose();         // -∂f/∂u
+      if (mu <= 0 || pressure <= 0) continue;
+      // Regularised Coulomb friction: τ = μ p tanh(τ_trial / (μ p)), τ_trial = τ_n + ε_T Δs.
+      // Linear (stick, stiffness ε_T) for small τ_trial, saturating smoothly at |τ| = μ p.
+      const double slip = Tv.dot(du);                        // tangential slip increment
+      const double tau_trial = tau[p][idx] + eps_t * slip;
+      const double limit = mu * pressure;
+      const double u = tau_trial / limit;
+      const double th = std::tanh(u), sech2 = 1 - th * th;
+      const double tau_value = limit * th;
+      const double dtau_dtrial = sech2;                        // ∂τ/∂τ_trial
+      const double dtau_dp = mu * (th - u * sech2);            // ∂τ/∂p
+      trial_tau[p][idx] = tau_value;
+      local.vector -= tau_value * A * Tv;                      // friction opposes the slip
+      local.matrix += dtau_dtrial * eps_t * A * Tv * Tv.transpose();
+      local.matrix -= dtau_dp * k_n * A * Tv * Nv.transpose();  // ∂p/∂u = -k_n Nvᵀ
+    }
+  }
+
+  // Reduced residual (and tangent) at the current increment.
+  void evaluate(Control ctrl, fem::SparseMatrix& K, Eigen::VectorXd& R, bool matrix) {
+    const std::vector<fem::Point> x = trial_positions();
+    for (auto& pairing : pairings)
+      if (!pairing.update(x)) pairing_within = false;
+    const fem::Assembler& assembler = ctrl == Control::force ? *force_assembler : *displacement_assembler;
+    fem::Assembler::Terms terms;
+    terms.cells = [this](int e, fem::LocalSystem& l) { cell_kernel(e, l); };
+    terms.groups = [this](int g, fem::LocalSystem& l) { group_kernel(g, l); };
+    for (const auto& [boundary, pressure] : settings.pressure_loads) {
+      const double p = pressure;
+      terms.faces.push_back({&mesh.boundary(boundary), [this, p](const fem::BoundaryFace& f, fem::LocalSystem& l) {
+                               fem::FaceValues fv(settings.n_gauss);
+                               fv.reinit(current, f.cell, f.face);
+                               for (int q = 0; q < fv.n_q(); ++q)
+                                 for (int a = 0; a < 4; ++a)  // traction t = -p n
+                                   l.vector.segment<2>(2 * a) -= p * fv.normal(q) * fv.N(q, a) * fv.JxW(q);
+                             }});
+    }
+    assembler.assemble(terms, K, R, /*homogeneous=*/true, matrix);
+    if (ctrl == Control::force) {
+      Eigen::VectorXd f_ext = Eigen::VectorXd::Zero(dofs.n_dofs());
+      f_ext[w_dof] = -force;  // the electrode presses down on the stack
+      R += force_constraints.condense(f_ext);
+    }
+  }
+
+  MechanicsStepReport newton(Control ctrl, double load_scale) {
+    fem::Constraints& cons = ctrl == Control::force ? force_constraints : displacement_constraints;
+    fem::LinearSolver& solver = ctrl == Control::force ? force_solver : displacement_solver;
+    MechanicsStepReport report;
+    fem::SparseMatrix K;
+    Eigen::VectorXd R;
+    const double tolerance = settings.residual_tolerance * std::max(load_scale, 1.0);
+    pairing_within = true;
+    evaluate(ctrl, K, R, true);
+    double norm = R.lpNorm<Eigen::Infinity>();
+    for (int it = 1; it <= settings.max_iterations; ++it) {
+      report.iterations = it;
+      Eigen::VectorXd dy;
+      try {
+        dy = solver.solve(K, R);
+      } catch (const std::exception& e) {
+        report.message = std::string("linear solve failed: ") + e.what();
+        report.residual = norm;
+        return report;
+      }
+      const Eigen::VectorXd step = cons.distribute(dy, /*homogeneous=*/true);
+      const Eigen::VectorXd base = increment;
+      // Backtracking on the Euclidean residual norm.
+      double alpha = 1.0;
+      const double norm2 = R.norm();
+      for (int ls = 0; ls < 8; ++ls) {
+        increment = base + alpha * step;
+        evaluate(ctrl, K, R, false);
+        if (R.norm() <= (1 - 1e-4 * alpha) * norm2 || ls == 7) break;
+        alpha *= 0.5;
+      }
+      evaluate(ctrl, K, R, true);
+      norm = R.lpNorm<Eigen::Infinity>();
+      const double correction = (alpha * step).lpNorm<Eigen::Infinity>();
+      if (settings.verbose)
+        std::fprintf(stderr, "  newton %2d: |R| = %.3e N, alpha = %.3f, |du| = %.3e m\n", it, norm, alpha, correction);
+      if (norm <= tolerance || (correction <= settings.displacement_tolerance && norm <= 1e3 * tolerance)) {
+        report.converged = true;
+        break;
+      }
+    }
+    report.residual = norm;
+    if (!report.converged)
+      report.message = "Newton did not converge in " + std::to_string(settings.max_iterations) +
+                       " iterations (residual " + std::to_string(norm) + " N)";
+    if (!pairing_within)
+      report.message += std::string(report.message.empty() ? "" : "; ") +
+                        "a contact point slid beyond its search margin";
+    return report;
+  }
+
+  // Initial guess: the last step's increment scaled to this step's load change (same
+  // control); for a first displacement step, the loaded body moved rigidly by Δw.
+  void predict(Control ctrl, double change) {
+    load_change = change;
+    if (last_control == ctrl && last_load_change != 0 && change != 0) {
+      increment = last_increment * (change / last_load_change);
+      return;
+    }
+    increment.setZero();
+    if (ctrl == Control::displacement) {
+      const int body = mesh.node_body[mesh.boundary_nodes(settings.loaded_boundary).front()];
+      for (int n = 0; n < mesh.n_nodes(); ++n)
+        if (mesh.node_body[n] == body) increment[2 * n + 1] = change;
+      increment[w_dof] = change;
+    }
+  }
+
+  // Axial force through the upper end face at the current increment (N, > 0 pressing):
+  // the force-control residual with no applied load is the end face's internal force.
+  double end_face_force() {
+    const double saved = force;
+    force = 0;
+    fem::SparseMatrix K;
+    Eigen::VectorXd R;
+    evaluate(Control::force, K, R, false);
+    force = saved;
+    const int w_free = force_constraints.free_index(w_dof);
+    return R[w_free];
+  }
+};
+
+Mechanics::Mechanics(const fem::Mesh& mesh, std::vector<const materials::Material*> body_materials,
+                     const MechanicsSettings& settings, double initial_temperature)
+    : impl_(std::make_unique<Impl>(mesh, std::move(body_materials), settings, initial_temperature)),
+      positions_(mesh.nodes) {}
+
+Mechanics::~Mechanics() = default;
+
+MechanicsStepReport Mechanics::solve_force_step(double force, const Eigen::VectorXd& nodal_temperature) {
+  Impl& m = *impl_;
+  m.temperature = nodal_temperature;
+  m.control = Control::force;
+  m.force = force;
+  m.predict(Control::force, force - force_);
+  auto report = m.newton(Control::force, std::abs(force));
+  force_ = force;
+  return report;
+}
+
+MechanicsStepReport Mechanics::solve_displacement_step(double w, const Eigen::VectorXd& nodal_temperature) {
+  Impl& m = *impl_;
+  m.temperature = nodal_temperature;
+  m.control = Control::displacement;
+  m.displacement_constraints.set_value(m.w_dof, w - w_);
+  m.displacement_constraints.close();
+  m.predict(Control::displacement, w - w_);
+  // Load scale for the tolerance: the force of the previous step, or a nominal 1 kN.
+  auto report = m.newton(Control::displacement, std::max(std::abs(force_), 1e3));
+  force_ = m.end_face_force();
+  return report;
+}
+
+void Mechanics::commit() {
+  Impl& m = *impl_;
+  m.strain = m.trial_strain;
+  m.state = m.trial_state;
+  m.tau = m.trial_tau;
+  m.total += m.increment;
+  m.last_increment = m.increment;
+  m.last_load_change = m.load_change;
+  m.last_control = m.control;
+  for (int n = 0; n < m.mesh.n_nodes(); ++n)
+    m.current.nodes[n] += Eigen::Vector2d(m.increment[2 * n], m.increment[2 * n + 1]);
+  w_ += m.increment[m.w_dof];
+  m.increment.setZero();
+  positions_ = m.current.nodes;
+}
+
+Eigen::VectorXd Mechanics::displacement() const {
+  return impl_->total.head(2 * impl_->mesh.n_nodes());
+}
+
+std::vector<InterfaceState> Mechanics::interface_states() const {
+  std::vector<InterfaceState> out;
+  const Impl& m = *impl_;
+  for (std::size_t p = 0; p < m.pairings.size(); ++p) {
+    const auto& pairing = m.pairings[p];
+    InterfaceState s;
+    s.name = pairing.name();
+    std::vector<int> order(pairing.points().size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+    std::sort(order.begin(), order.end(), [&](int a, int b) {
+      return pairing.points()[a].position.x() < pairing.points()[b].position.x();
+    });
+    for (int i : order) {
+      const auto& pt = pairing.points()[i];
+      const double pressure =
+          pt.paired ? penalty_pressure(pt.gap, m.normal_penalty[p], m.settings.contact_smoothing).pressure : 0.0;
+      s.radius.push_back(pt.position.x());
+      s.pressure.push_back(pressure);
+      s.gap.push_back(pt.paired ? pt.gap : std::nan(""));
+      s.shear.push_back(m.tau[p][i]);
+      s.normal_force += pressure * pt.area;
+    }
+    // Outermost zero crossing of the gap, interpolated between points.
+    for (std::size_t i = 0; i + 1 < s.gap.size(); ++i) {
+      const double g0 = s.gap[i], g1 = s.gap[i + 1];
+      if (std::isnan(g0) || std::isnan(g1)) continue;
+      if (g0 <= 0 && g1 > 0) s.contact_radius = s.radius[i] + (s.radius[i + 1] - s.radius[i]) * g0 / (g0 - g1);
+    }
+    out.push_back(std::move(s));
+  }
+  return out;
+}
+
+std::vector<double> Mechanics::von_mises() const {
+  const Impl& m = *impl_;
+  std::vector<double> out(m.mesh.n_cells(), 0.0);
+  for (int e = 0; e < m.mesh.n_cells(); ++e) {
+    for (int q = 0; q < m.n_q; ++q) {
+      const Vector4& s = m.trial_stress[static_cast<std::size_t>(e) * m.n_q + q];
+      const double p = (s[0] + s[1] + s[2]) / 3.0;
+      const Vector4 dev(s[0] - p, s[1] - p, s[2] - p, s[3]);
+      out[e] += std::sqrt(1.5 * dev.squaredNorm());  // Mandel: s:s = |dev|^2
+    }
+    out[e] /= m.n_q;
+  }
+  return out;
+}
+
+std::vector<double> Mechanics::equivalent_plastic_strain() const {
+  const Impl& m = *impl_;
+  std::vector<double> out(m.mesh.n_cells(), 0.0);
+  for (int e = 0; e < m.mesh.n_cells(); ++e) {
+    for (int q = 0; q < m.n_q; ++q)
+      out[e] += m.state[static_cast<std::size_t>(e) * m.n_q + q].equivalent_plastic_strain;
+    out[e] /= m.n_q;
+  }
+  return out;
+}
+
+std::vector<PointStress> Mechanics::point_stresses() const {
+  const Impl& m = *impl_;
+  std::vector<PointStress> out;
+  fem::CellValues fv(m.settings.n_gauss);
+  for (int e = 0; e < m.mesh.n_cells(); ++e) {
+    fv.reinit(m.current, e);
+    for (int q = 0; q < m.n_q; ++q) out.push_back({fv.point(q), m.trial_stress[static_cast<std::size_t>(e) * m.n_q + q]});
+  }
+  return out;
+}
+
+double Mechanics::normal_penalty(const std::string& interface) const {
+  for (std::size_t p = 0; p < impl_->pairings.size(); ++p)
+    if (impl_->pairings[p].name() == interface) return impl_->normal_penalty[p];
+  throw std::out_of_range("unknown interface '" + interface + "'");
+}
+
+void Mechanics::residual_and_tangent(const Eigen::VectorXd& increment, double force,
+                                     const Eigen::VectorXd& nodal_temperature, Eigen::VectorXd& residual,
+                                     fem::SparseMatrix& tangent) {
+  Impl& m = *impl_;
+  m.temperature = nodal_temperature;
+  m.force = force;
+  m.control = Control::force;
+  m.increment = increment;
+  m.evaluate(Control::force, tangent, residual, true);
+}
+
+int Mechanics::n_free_force_control() const { return impl_->force_constraints.n_free(); }
+
+Eigen::VectorXd Mechanics::full_increment(const Eigen::VectorXd& reduced) const {
+  return impl_->force_constraints.distribute(reduced, true);
+}
+
+}  // namespace rsw::physics

@@ -1,0 +1,154 @@
+// Quasi-static axisymmetric thermo-elasto-plastic mechanics of the electrode/sheet
+// stack with contact on the named interfaces.
+//
+// Equilibrium ∇·σ = 0, solved per load step for the displacement increment Δu:
+//   R(Δu) = f_ext + f_contact(x_n + Δu) - Σ_cells ∫ B̄ᵀ σ(ε_n + B̄ Δu, T) dV  = 0,
+// by Newton's method with a backtracking line search on |R|.
+//
+// Kinematics (updated Lagrangian, small increments): B̄ and dV are evaluated on the
+// configuration x_n at the start of the step; after convergence x_{n+1} = x_n + Δu
+// and the strain accumulates, ε_{n+1} = ε_n + B̄ Δu. Stresses are not rotated, so
+// the formulation is valid while rigid rotations stay small (in a spot weld the
+// material near the electrode rotates by well under a degree; indentation is a few
+// per cent of the sheet thickness). The force imbalance created by moving the
+// geometry is carried into the next step's residual and removed there.
+// Strains use Mandel notation [ε_rr, ε_zz, ε_θθ, √2 ε_rz] with the hoop strain
+// ε_θθ = u_r / r; B̄ replaces the volumetric part of B by its cell average (Hughes
+// 1980) so that isochoric plastic flow does not lock the bilinear elements.
+// Material: J2 plasticity with temperature-dependent E, ν, α and flow curves
+// (materials/j2_plasticity), driven by the nodal temperature field.
+//
+// Loads: the lower electrode's end face is fixed (u = 0); the upper end face moves
+// rigidly in z (one extra unknown w: u_z = w on all its nodes, u_r = 0) and carries
+// the electrode force F, or w is prescribed (displacement control, used to seat the
+// bodies before force control takes over); u_r = 0 on the axis.
+//
+// Contact (per interface, Gauss-point-to-segment, contact/interface_pairing): normal
+// pressure from a C¹ penalty law
+//   p = 0 (g >= 0),  ε_N g²/(2δ) (-δ < g < 0),  ε_N (-g - δ/2) (g <= -δ),
+// with ε_N = penalty_factor · E/h (E the stiffer side's room-temperature modulus, h
+// the finest interface cell) and δ = contact_smoothing. The quadratic start keeps
+// the residual differentiable when a point enters contact, so Newton converges
+// quadratically instead of cycling between active sets, and contact outputs vary
+// smoothly; penetration at 1 GPa is about 1/ε_N · 1 GPa ≈ 0.03 µm. Bodies touching
+// at a single point are not held by that, so seating (displacement control, see
+// physics/squeeze) puts the unsupported bodies on a weak elastic foundation until
+// contact carries them.
+// Coulomb friction, regularised: τ = μ p tanh(τ_trial / (μ p)) with the elastic
+// trial traction τ_trial = τ_n + ε_T Δs (Δs the tangential slip increment of the
+// slave point relative to the master, τ_n the committed history): stick with
+// stiffness ε_T at small traction, sliding as |τ| → μ p, and no switch between the
+// two, so the tangent stays continuous.
+#pragma once
+
+#include "contact/interface_pairing.hpp"
+#include "fem/assembler.hpp"
+#include "fem/constraints.hpp"
+#include "fem/dof_map.hpp"
+#include "fem/linear_solver.hpp"
+#include "fem/mesh.hpp"
+#include "materials/j2_plasticity.hpp"
+#include "materials/material.hpp"
+
+#include <Eigen/Core>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace rsw::physics {
+
+struct MechanicsSettings {
+  double friction_coefficient = 0.3;      // μ; 0 = frictionless
+  double penalty_factor = 10.0;           // ε_N = factor · E / h
+  double tangential_penalty_ratio = 1.0;  // ε_T = ratio · ε_N
+  double contact_smoothing = 1e-8;        // m, δ of the C¹ penalty law (see below)
+  // Seating aid: under displacement control, bodies with no support of their own
+  // (the sheets) rest on an elastic foundation of this total stiffness (N/m) towards
+  // their initial axial position, so that they are held before contact closes.
+  // Force-controlled steps never use it.
+  double seating_stiffness = 1e3;
+  int max_iterations = 40;
+  double residual_tolerance = 1e-8;       // relative to the load scale
+  double displacement_tolerance = 1e-13;  // m, on the Newton correction
+  int n_gauss = 2;
+  bool verbose = false;                   // print Newton iterations to stderr (also RSW_VERBOSE=1)
+  // Supports: u_z = 0 on `fixed_boundary`; the nodes of `loaded_boundary` share one
+  // axial displacement w (force or displacement controlled); with clamp_radially,
+  // u_r = 0 on both. u_r = 0 on every boundary named "<body>.axis".
+  std::string fixed_boundary = "lower_electrode.end_face";
+  std::string loaded_boundary = "upper_electrode.end_face";
+  bool clamp_radially = true;
+  // Normal pressure on named boundaries (Pa, pressing into the body), applied on the
+  // configuration at the start of each step.
+  std::vector<std::pair<std::string, double>> pressure_loads;
+};
+
+// Stress at one quadrature point (current configuration).
+struct PointStress {
+  fem::Point position;                // m
+  Eigen::Matrix<double, 4, 1> stress;  // Mandel [rr, zz, θθ, √2 rz], Pa
+};
+
+struct MechanicsStepReport {
+  bool converged = false;
+  int iterations = 0;
+  double residual = 0;  // N, final ∞-norm of the reduced residual
+  std::string message;
+};
+
+// Contact state of one interface after a step.
+struct InterfaceState {
+  std::string name;
+  std::vector<double> radius;    // current r of each slave point, m
+  std::vector<double> pressure;  // Pa
+  std::vector<double> gap;       // m
+  std::vector<double> shear;     // tangential traction, Pa
+  double normal_force = 0;       // N, ∫ p dA
+  double contact_radius = 0;     // m, outermost zero of the interpolated gap
+};
+
+class Mechanics {
+ public:
+  // `body_materials[b]` is the material of mesh body b; `initial_temperature` is the
+  // stress-free temperature (°C).
+  Mechanics(const fem::Mesh& mesh, std::vector<const materials::Material*> body_materials,
+            const MechanicsSettings& settings, double initial_temperature);
+  ~Mechanics();
+
+  // Force control: the upper end face carries `force` (N, > 0 presses the stack).
+  MechanicsStepReport solve_force_step(double force, const Eigen::VectorXd& nodal_temperature);
+  // Displacement control: the upper end face's total z displacement is `w` (m).
+  MechanicsStepReport solve_displacement_step(double w, const Eigen::VectorXd& nodal_temperature);
+  // Accepts the last converged step: history, geometry and totals move forward.
+  void commit();
+
+  // Totals after the last commit.
+  const std::vector<fem::Point>& positions() const { return positions_; }
+  Eigen::VectorXd displacement() const;  // nodal (u_r, u_z), node-major
+  double end_face_displacement() const { return w_; }
+  // Axial force transmitted through the upper end face (N, > 0 pressing), from the
+  // last solved step (the reaction in displacement control).
+  double electrode_force() const { return force_; }
+  std::vector<InterfaceState> interface_states() const;
+  // Cell averages over the Gauss points: von Mises stress (Pa), equivalent plastic strain.
+  std::vector<double> von_mises() const;
+  std::vector<double> equivalent_plastic_strain() const;
+  std::vector<PointStress> point_stresses() const;
+  double normal_penalty(const std::string& interface) const;
+
+  // Residual and tangent of the reduced system for a given increment (force
+  // control), for finite-difference checks of the Jacobian.
+  void residual_and_tangent(const Eigen::VectorXd& increment, double force, const Eigen::VectorXd& nodal_temperature,
+                            Eigen::VectorXd& residual, fem::SparseMatrix& tangent);
+  int n_free_force_control() const;
+  Eigen::VectorXd full_increment(const Eigen::VectorXd& reduced) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  std::vector<fem::Point> positions_;
+  double w_ = 0, force_ = 0;
+};
+
+}  // namespace rsw::physics

@@ -1,0 +1,80 @@
+// The mechanical tangent (B̄ elements with the consistent J2 tangent, penalty contact
+// with friction) against central finite differences of the residual, on a coarse
+// weld case with plastic points, contact, stick and slip.
+#include "meshes/weld_mesh.hpp"
+#include "physics/mechanics.hpp"
+#include "physics/problem.hpp"
+#include "physics/squeeze.hpp"
+#include "materials/material_library.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <random>
+
+using namespace rsw;
+
+namespace {
+struct CoarseCase {
+  physics::Problem problem = physics::load_problem(std::string(RSW_SOURCE_DIR) + "/validation/paper_case/weld.yaml",
+                                                   {"mesh.base_size=0.5 mm", "mesh.weld_zone.levels=1"});
+  fem::Mesh mesh = meshes::weld_mesh(problem.geometry, problem.mesh);
+  materials::MaterialLibrary library;
+  materials::Material copper = library.load("CuCrZr"), steel = library.load("DP1200");
+};
+
+double jacobian_error(physics::Mechanics& mech, const Eigen::VectorXd& T, double force, const Eigen::VectorXd& base) {
+  Eigen::VectorXd R;
+  fem::SparseMatrix K;
+  mech.residual_and_tangent(base, force, T, R, K);
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> normal;
+  Eigen::VectorXd v(mech.n_free_force_control());
+  for (int i = 0; i < v.size(); ++i) v[i] = normal(rng);
+  v *= 1e-6 / v.lpNorm<Eigen::Infinity>();  // a 1 µm direction
+  const double h = 1e-4;                     // step: 0.1 nm
+  const Eigen::VectorXd Kv = K * v;
+  Eigen::VectorXd Rp, Rm;
+  fem::SparseMatrix dummy;
+  mech.residual_and_tangent(base + mech.full_increment(h * v), force, T, Rp, dummy);
+  mech.residual_and_tangent(base - mech.full_increment(h * v), force, T, Rm, dummy);
+  const Eigen::VectorXd fd = -(Rp - Rm) / (2 * h);
+  return (fd - Kv).norm() / Kv.norm();
+}
+}  // namespace
+
+TEST(MechanicsJacobian, TangentMatchesFiniteDifferencesWithPlasticityContactAndFriction) {
+  CoarseCase c;
+  physics::MechanicsSettings s;
+  s.friction_coefficient = 0.3;
+  physics::Mechanics mech(c.mesh, {&c.copper, &c.steel, &c.steel, &c.copper}, s, 20.0);
+  const Eigen::VectorXd T = Eigen::VectorXd::Constant(c.mesh.n_nodes(), 20.0);
+  const auto sq = physics::squeeze(mech, 3000.0, T);
+  ASSERT_TRUE(sq.converged) << sq.message;
+  // One Newton iterate towards 3.6 kN: plastic loading, contact growth, slip.
+  Eigen::VectorXd R;
+  fem::SparseMatrix K;
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(mech.full_increment(Eigen::VectorXd::Zero(mech.n_free_force_control())).size());
+  mech.residual_and_tangent(zero, 3600.0, T, R, K);
+  fem::LinearSolver solver(fem::SolverKind::umfpack);
+  const Eigen::VectorXd base = mech.full_increment(solver.solve(K, R));
+  const double err = jacobian_error(mech, T, 3600.0, base);
+  std::printf("relative difference between K v and the central difference of R: %.2e\n", err);
+  EXPECT_LT(err, 1e-3);
+}
+
+TEST(MechanicsJacobian, FrictionlessTangentIsSymmetric) {
+  CoarseCase c;
+  physics::MechanicsSettings s;
+  s.friction_coefficient = 0.0;
+  physics::Mechanics mech(c.mesh, {&c.copper, &c.steel, &c.steel, &c.copper}, s, 20.0);
+  const Eigen::VectorXd T = Eigen::VectorXd::Constant(c.mesh.n_nodes(), 20.0);
+  const auto sq = physics::squeeze(mech, 3000.0, T);
+  ASSERT_TRUE(sq.converged) << sq.message;
+  Eigen::VectorXd R;
+  fem::SparseMatrix K;
+  const Eigen::VectorXd zero = mech.full_increment(Eigen::VectorXd::Zero(mech.n_free_force_control()));
+  mech.residual_and_tangent(zero, 3000.0, T, R, K);
+  const fem::SparseMatrix Kt = K.transpose();
+  EXPECT_LT((K - Kt).norm(), 1e-10 * K.norm());
+}

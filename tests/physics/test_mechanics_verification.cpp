@@ -1,0 +1,190 @@
+// Mechanics against closed forms: free thermal expansion, the Lamé thick cylinder,
+// Hertz contact of the R30 dome on a flat; and the plastic squeeze of the default
+// weld case (force balance on every interface, contact radius beyond Hertz).
+#include "mechanics_fixtures.hpp"
+#include "meshes/weld_mesh.hpp"
+#include "physics/mechanics.hpp"
+#include "physics/problem.hpp"
+#include "physics/squeeze.hpp"
+
+#include <Eigen/QR>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+
+using namespace rsw;
+
+// A disc with a hanging-node corner heated uniformly by 100 K expands freely:
+// u = ε_th x with ε_th = α ΔT, and the stress vanishes.
+TEST(MechanicsVerification, FreeThermalExpansionIsStressFreeOnHangingNodeMesh) {
+  const double alpha = 12e-6, dT = 100.0;
+  const auto mat = test::elastic_material("steel", 210e9, 0.3, alpha);
+  const fem::Mesh mesh = test::block_mesh("disc", 0, 2e-3, 0, 1e-3, 0.25e-3, 2,
+                                          [](const fem::IndexBox& b) { return b.x0 < 2 && b.y0 < 2; });
+  ASSERT_GT(mesh.hanging_nodes.size(), 0u);
+  physics::MechanicsSettings s;
+  s.fixed_boundary = "disc.bottom";
+  s.loaded_boundary = "disc.top";
+  s.clamp_radially = false;
+  s.friction_coefficient = 0;
+  physics::Mechanics mech(mesh, {&mat}, s, 20.0);
+  const Eigen::VectorXd T = Eigen::VectorXd::Constant(mesh.n_nodes(), 20.0 + dT);
+  const auto report = mech.solve_force_step(0.0, T);
+  ASSERT_TRUE(report.converged) << report.message;
+  mech.commit();
+  const double eps = alpha * dT;
+  const Eigen::VectorXd u = mech.displacement();
+  double worst_u = 0, worst_s = 0;
+  for (int n = 0; n < mesh.n_nodes(); ++n) {
+    worst_u = std::max(worst_u, std::abs(u[2 * n] - eps * mesh.nodes[n].x()));
+    worst_u = std::max(worst_u, std::abs(u[2 * n + 1] - eps * mesh.nodes[n].y()));
+  }
+  for (const auto& p : mech.point_stresses()) worst_s = std::max(worst_s, p.stress.lpNorm<Eigen::Infinity>());
+  std::printf("free expansion: eps_th = %.3e, max |u - eps x| = %.2e m, max |sigma| = %.2e Pa (E eps = %.2e Pa)\n", eps,
+              worst_u, worst_s, 210e9 * eps);
+  EXPECT_LT(worst_u, 1e-9 * eps * 2e-3 + 1e-15);
+  EXPECT_LT(worst_s, 1e-6 * 210e9 * eps);
+}
+
+// Ring r in [1, 2] mm under 100 MPa internal pressure, free ends (generalised plane
+// strain): σ_r = A - B/r², σ_θ = A + B/r², A = p r_i²/(r_o² - r_i²) = 33.33 MPa,
+// B = A r_o² = 133.33 MPa mm². Compared per cell: the mean of the cell's Gauss-point
+// stresses against the closed form at the mean Gauss-point radius (B̄ averages the
+// volumetric strain over the cell, so single Gauss points carry an O(h) error where
+// σ_r is steep).
+TEST(MechanicsVerification, LameThickCylinderStressesWithinOnePercent) {
+  const double ri = 1e-3, ro = 2e-3, p = 100e6;
+  const auto mat = test::elastic_material("steel", 210e9, 0.3, 12e-6);
+  const fem::Mesh mesh = test::block_mesh("ring", ri, ro, 0, 0.125e-3, 1.0e-3 / 32);
+  physics::MechanicsSettings s;
+  s.fixed_boundary = "ring.bottom";
+  s.loaded_boundary = "ring.top";
+  s.clamp_radially = false;
+  s.friction_coefficient = 0;
+  s.pressure_loads = {{"ring.left", p}};
+  physics::Mechanics mech(mesh, {&mat}, s, 20.0);
+  const Eigen::VectorXd T = Eigen::VectorXd::Constant(mesh.n_nodes(), 20.0);
+  const auto report = mech.solve_force_step(0.0, T);
+  ASSERT_TRUE(report.converged) << report.message;
+  mech.commit();
+  const double A = p * ri * ri / (ro * ro - ri * ri), B = A * ro * ro;
+  const auto points = mech.point_stresses();
+  double worst = 0;
+  for (std::size_t c = 0; c < points.size(); c += 4) {
+    double r = 0, s_r = 0, s_t = 0;
+    for (std::size_t q = c; q < c + 4; ++q) {
+      r += points[q].position.x() / 4;
+      s_r += points[q].stress[0] / 4;
+      s_t += points[q].stress[2] / 4;
+    }
+    worst = std::max({worst, std::abs(s_r - (A - B / (r * r))) / (B / (r * r)),
+                      std::abs(s_t - (A + B / (r * r))) / (A + B / (r * r))});
+  }
+  std::printf("Lame cylinder: A = %.3f MPa, B = %.3f MPa mm^2, %d cells across the wall, worst relative error "
+              "%.3f %%\n", A / 1e6, B / 1e6 * 1e6, 32, 100 * worst);
+  EXPECT_LT(worst, 0.01);
+}
+
+// Hertz: the R30 CuCrZr dome (E = 128 GPa) pressed on steel (E = 210 GPa), ν = 0.3,
+// both elastic, frictionless: E* = 87.4 GPa, and at 3 kN
+//   a = (3FR/(4E*))^(1/3) = 0.918 mm, p0 = 3F/(2πa²) = 1.70 GPa, δ = a²/R = 28.1 µm.
+// Thick sheets (2 x 4 mm) approximate the half-space. The approach of the distant
+// points is δ_total(F) = c F + 2 K F^(2/3) (bulk compliance plus the two Hertz
+// contacts, upper and lower); c and K are fitted to four loads and δ = K F^(2/3).
+TEST(MechanicsVerification, HertzDomeOnFlatMatchesClosedForm) {
+  const double E1 = 128e9, E2 = 210e9, nu = 0.3, R = 30e-3, F = 3000.0;
+  const double E_star = 1.0 / ((1 - nu * nu) / E1 + (1 - nu * nu) / E2);
+  const double a = std::cbrt(3 * F * R / (4 * E_star)), p0 = 3 * F / (2 * M_PI * a * a), delta = a * a / R;
+  const auto copper = test::elastic_material("copper", E1, nu, 17e-6);
+  const auto steel = test::elastic_material("steel", E2, nu, 12e-6);
+
+  meshes::StackGeometry stack;
+  stack.sheets = {{"sheet_1", "steel", 4e-3}, {"sheet_2", "steel", 4e-3}};
+  meshes::MeshSettings ms;
+  ms.weld_zone_levels = 0;
+  ms.extra_boxes = {{0, 2e-3, 3e-3, 5e-3, 2}, {0, 2e-3, -5e-3, -3e-3, 2}};
+  const fem::Mesh mesh = meshes::weld_mesh(stack, ms);
+  physics::MechanicsSettings s;
+  s.friction_coefficient = 0;
+  s.verbose = std::getenv("RSW_VERBOSE") != nullptr;
+  physics::Mechanics mech(mesh, {&copper, &steel, &steel, &copper}, s, 20.0);
+  const Eigen::VectorXd T = Eigen::VectorXd::Constant(mesh.n_nodes(), 20.0);
+
+  const auto seated = physics::squeeze(mech, 750.0, T, {1e-6, 0.2, 400, 2});
+  ASSERT_TRUE(seated.converged) << seated.message;
+  std::vector<double> loads{mech.electrode_force()}, approach{-mech.end_face_displacement()};
+  for (double f : {1500.0, 2250.0, 3000.0}) {
+    const auto ramp = physics::ramp_force(mech, f, 1, T);
+    ASSERT_TRUE(ramp.converged) << ramp.message;
+    loads.push_back(f);
+    approach.push_back(-mech.end_face_displacement());
+  }
+  // Least squares for δ_total = c F + 2 K F^(2/3).
+  Eigen::MatrixXd M(loads.size(), 2);
+  Eigen::VectorXd y(loads.size());
+  for (std::size_t i = 0; i < loads.size(); ++i) {
+    M(i, 0) = loads[i];
+    M(i, 1) = 2 * std::pow(loads[i], 2.0 / 3.0);
+    y[i] = approach[i];
+  }
+  const Eigen::Vector2d fit = M.colPivHouseholderQr().solve(y);
+  const double delta_fe = fit[1] * std::pow(F, 2.0 / 3.0);
+
+  double a_fe = 0, p_fe = 0;
+  for (const auto& st : mech.interface_states())
+    if (st.name == "es_upper") {
+      a_fe = st.contact_radius;
+      for (double p : st.pressure) p_fe = std::max(p_fe, p);
+    }
+  std::printf("Hertz at 3 kN: a = %.4f mm (closed form %.4f), p0 = %.3f GPa (%.3f), delta = %.2f um (%.2f); "
+              "fit residual %.2e m\n",
+              a_fe * 1e3, a * 1e3, p_fe / 1e9, p0 / 1e9, delta_fe * 1e6, delta * 1e6, (M * fit - y).norm());
+  EXPECT_NEAR(a_fe, a, 0.05 * a);
+  EXPECT_NEAR(p_fe, p0, 0.05 * p0);
+  EXPECT_NEAR(delta_fe, delta, 0.05 * delta);
+}
+
+// The plastic squeeze of the default case (paper: 2 x 1 mm DP1200, CuCrZr R30, 3 kN,
+// friction 0.3): every contact surface transmits the electrode force, and plastic
+// indentation makes the E/S contact wider than the elastic Hertz radius 0.918 mm.
+TEST(MechanicsVerification, PlasticSqueezeOfDefaultCaseBalancesForceOnEveryInterface) {
+  const physics::Problem problem = physics::load_problem(std::string(RSW_SOURCE_DIR) + "/validation/paper_case/weld.yaml");
+  const fem::Mesh mesh = meshes::weld_mesh(problem.geometry, problem.mesh);
+  materials::MaterialLibrary library;
+  const auto copper = library.load("CuCrZr");
+  const auto steel = library.load("DP1200");
+  physics::MechanicsSettings s;
+  s.friction_coefficient = problem.contact.friction_coefficient;
+  physics::Mechanics mech(mesh, {&copper, &steel, &steel, &copper}, s, 20.0);
+  const Eigen::VectorXd T = Eigen::VectorXd::Constant(mesh.n_nodes(), 20.0);
+  const double F = problem.schedule.force.at(0.0);
+  const auto result = physics::squeeze(mech, F, T);
+  ASSERT_TRUE(result.converged) << result.message;
+  int n_iter = 0;
+  for (const auto& st : result.steps) n_iter += st.iterations;
+  std::printf("squeeze: %zu steps, %d Newton iterations, electrode displacement %.2f um\n", result.steps.size(), n_iter,
+              mech.end_face_displacement() * 1e6);
+  for (const auto& st : mech.interface_states()) {
+    double p_max = 0;
+    for (double p : st.pressure) p_max = std::max(p_max, p);
+    std::printf("  %-9s contact radius %.4f mm, peak pressure %.3f GPa, integral of sigma_n %.2f N (%.3f %% off)\n",
+                st.name.c_str(), st.contact_radius * 1e3, p_max / 1e9, st.normal_force,
+                100 * (st.normal_force - F) / F);
+    EXPECT_NEAR(st.normal_force, F, 0.005 * F) << st.name;
+    if (st.name != "ss_1_2") {
+      EXPECT_GT(st.contact_radius, 0.918e-3) << st.name;
+    }
+  }
+  // Indentation: the sheet surface on the axis moved down relative to the sheet's
+  // free surface at r = 6 mm.
+  const Eigen::VectorXd u = mech.displacement();
+  double u_axis = 0, u_out = 0;
+  for (int n : mesh.boundary_nodes("sheet_1.top")) {
+    if (mesh.nodes[n].x() == 0) u_axis = u[2 * n + 1];
+    if (std::abs(mesh.nodes[n].x() - 6e-3) < 1e-9) u_out = u[2 * n + 1];
+  }
+  std::printf("  indentation of sheet_1 (axis vs r = 6 mm): %.2f um\n", (u_out - u_axis) * 1e6);
+  EXPECT_GT(u_out - u_axis, 0.0);
+}
