@@ -1,0 +1,312 @@
+// Feature extraction from weld signals; definitions in features.hpp (MODEL.md §10,
+// El Ouafi et al. 2012 for the dynamic-resistance geometry, paper §2.2 for the
+// displacement and temperature features).
+#include "calibration/features.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace rsw::calibration {
+namespace {
+
+std::string milliseconds(double seconds) {
+  std::ostringstream out;
+  out.precision(6);
+  out << seconds * 1e3 << " ms";
+  return out.str();
+}
+
+std::string number(double value) {
+  std::ostringstream out;
+  out.precision(6);
+  out << value;
+  return out.str();
+}
+
+// Values of `column` linearly interpolated at t_ws + k·step, k = k_first..k_last.
+Eigen::VectorXd on_grid(const Signal& signal, const std::string& column, double t_ws,
+                        double step, long k_first, long k_last) {
+  Eigen::VectorXd values(k_last - k_first + 1);
+  for (long k = k_first; k <= k_last; ++k) {
+    values[k - k_first] =
+        interpolate_linear(signal.time(), signal.column(column), t_ws + static_cast<double>(k) * step);
+  }
+  return values;
+}
+
+SmoothCurve smooth_curve(const Eigen::VectorXd& values, double t_first, double step,
+                         const SavitzkyGolayFilter& filter, const std::string& what) {
+  if (values.size() < filter.window_length()) {
+    throw FeatureError(what + " spans only " + std::to_string(values.size()) +
+                       " samples at a step of " + milliseconds(step) +
+                       "; the Savitzky-Golay window needs " +
+                       std::to_string(filter.window_length()) + " (signal too short)");
+  }
+  return SmoothCurve(t_first, step, filter.smooth(values), filter.slope(values, step));
+}
+
+void add_resistance_features(const Signal& signal, const WeldStage& stage, double step,
+                             const FeatureSettings& settings, const SavitzkyGolayFilter& filter,
+                             FeatureValues& features) {
+  const double threshold = settings.weld_current_fraction * stage.peak_current;
+  const long n_stage = static_cast<long>(std::floor((stage.end - stage.start) / step + 1e-9));
+  if (n_stage < 1) {
+    throw FeatureError("the weld stage lasts " + milliseconds(stage.end - stage.start) +
+                       ", less than one resampling step of " + milliseconds(step));
+  }
+  const Eigen::VectorXd current = on_grid(signal, signal_column::current, stage.start, step, 0, n_stage);
+  Eigen::VectorXd resistance;
+  if (signal.has_column(signal_column::resistance)) {
+    resistance = on_grid(signal, signal_column::resistance, stage.start, step, 0, n_stage);
+  } else {
+    resistance = on_grid(signal, signal_column::voltage, stage.start, step, 0, n_stage);
+    for (Eigen::Index k = 0; k < current.size(); ++k) {
+      if (std::abs(current[k]) < 0.5 * threshold) {
+        throw FeatureError("the current falls to " + number(current[k]) + " A at " +
+                           milliseconds(static_cast<double>(k) * step) +
+                           " after the weld start, below half the weld-stage threshold; "
+                           "pulsed waveforms with current pauses are not supported");
+      }
+      resistance[k] /= current[k];
+    }
+  }
+  const SmoothCurve curve =
+      smooth_curve(resistance, stage.start, step, filter, "the weld stage");
+
+  const double t_s = stage.start + settings.trim_margin;
+  const double t_e = std::min(stage.end - settings.trim_margin, curve.end());
+  if (t_e - t_s < 4 * step) {
+    throw FeatureError("the weld stage of " + milliseconds(stage.end - stage.start) +
+                       " leaves less than four resampling steps after trimming " +
+                       milliseconds(settings.trim_margin) + " at each end (signal too short)");
+  }
+  const SmoothCurve window = curve.trimmed(t_s, t_e);
+  const double tolerance = 1e-9 * step;
+
+  const CurvePoint beta = window.maximum();
+  if (beta.time <= t_s + tolerance || beta.time >= t_e - tolerance) {
+    throw FeatureError("the dynamic resistance has no peak inside the trimmed weld stage [" +
+                       milliseconds(t_s - stage.start) + ", " + milliseconds(t_e - stage.start) +
+                       "] (its maximum is at the " +
+                       std::string(beta.time <= t_s + tolerance ? "start" : "end") +
+                       "), so R_beta, R_alpha, m_1 and m_2 are undefined");
+  }
+  const CurvePoint steepest = window.trimmed(t_s, beta.time).maximum_slope();
+  if (!(steepest.value > 0)) {
+    throw FeatureError("the dynamic resistance does not rise before its peak, so the first "
+                       "inflection R_alpha is undefined");
+  }
+  const double r_alpha = window.value(steepest.time);
+  const double r_gamma = window.value(t_e);
+
+  namespace f = feature_name;
+  features.add(f::resistance_alpha, r_alpha);
+  features.add(f::resistance_beta, beta.value);
+  features.add(f::resistance_gamma, r_gamma);
+  features.add(f::time_alpha, steepest.time - stage.start);
+  features.add(f::time_beta, beta.time - stage.start);
+  features.add(f::time_gamma, t_e - stage.start);
+  features.add(f::slope_before_peak, (beta.value - r_alpha) / (beta.time - steepest.time));
+  features.add(f::slope_after_peak, (r_gamma - beta.value) / (t_e - beta.time));
+  features.add(f::resistance_mean, window.mean());
+  features.add(f::resistance_rise, beta.value - r_alpha);
+  features.add(f::resistance_drop, r_gamma - beta.value);
+}
+
+// The curve of `column` over the whole record, up to the record end of features.hpp.
+SmoothCurve record_curve(const Signal& signal, const std::string& column, const WeldStage& stage,
+                         double step, const FeatureSettings& settings,
+                         const SavitzkyGolayFilter& filter) {
+  const Eigen::VectorXd& time = signal.time();
+  const double record_end =
+      std::min(time[time.size() - 1], stage.end + settings.post_weld_window);
+  const auto k_first = static_cast<long>(std::ceil((time[0] - stage.start) / step - 1e-9));
+  const auto k_last = static_cast<long>(std::floor((record_end - stage.start) / step + 1e-9));
+  if (k_last <= k_first) {
+    throw FeatureError("the " + column + " record is shorter than one resampling step");
+  }
+  return smooth_curve(on_grid(signal, column, stage.start, step, k_first, k_last),
+                      stage.start + static_cast<double>(k_first) * step, step, filter,
+                      "the " + column + " record");
+}
+
+void add_displacement_features(const Signal& signal, const WeldStage& stage, double step,
+                               const FeatureSettings& settings,
+                               const SavitzkyGolayFilter& filter, FeatureValues& features) {
+  const SmoothCurve curve =
+      record_curve(signal, signal_column::displacement, stage, step, settings, filter);
+  const double t_s = stage.start + settings.trim_margin;
+  if (t_s >= curve.end() - step) {
+    throw FeatureError("the displacement record ends before " +
+                       milliseconds(settings.trim_margin) + " after the weld start");
+  }
+  const SmoothCurve after_start = curve.trimmed(t_s, curve.end());
+  const double s_0 = curve.value(t_s);
+  const CurvePoint peak = after_start.maximum();
+  if (peak.time <= t_s + 1e-9 * step) {
+    throw FeatureError("the electrode displacement does not rise after the weld start "
+                       "(its maximum after trimming is at the start), so S_dot_exp is undefined");
+  }
+  const double s_end = curve.value(curve.end());
+  namespace f = feature_name;
+  features.add(f::displacement_peak_expansion, peak.value - s_0);
+  features.add(f::displacement_end, s_end);
+  features.add(f::displacement_net, s_end - s_0);
+  features.add(f::displacement_expansion_rate, curve.trimmed(t_s, peak.time).fit_slope());
+}
+
+void add_temperature_features(const Signal& signal, const WeldStage& stage, double step,
+                              const FeatureSettings& settings,
+                              const SavitzkyGolayFilter& filter, FeatureValues& features) {
+  const SmoothCurve curve =
+      record_curve(signal, signal_column::temperature, stage, step, settings, filter);
+  const CurvePoint peak = curve.maximum();
+  if (peak.time >= curve.end() - 1e-9 * step) {
+    throw FeatureError("the sheet temperature peaks at the end of the record, so there is no "
+                       "cooling interval for T_dot_cool");
+  }
+  const double t_end = curve.end();
+  const double temperature_end = curve.value(t_end);
+  namespace f = feature_name;
+  features.add(f::temperature_max, peak.value);
+  features.add(f::time_temperature_max, peak.time - stage.start);
+  features.add(f::temperature_end, temperature_end);
+  features.add(f::cooling_rate, (temperature_end - peak.value) / (t_end - peak.time));
+}
+
+}  // namespace
+
+const std::vector<std::string>& resistance_feature_names() {
+  namespace f = feature_name;
+  static const std::vector<std::string> names = {
+      f::resistance_alpha,  f::resistance_beta,  f::resistance_gamma, f::time_alpha,
+      f::time_beta,         f::time_gamma,       f::slope_before_peak, f::slope_after_peak,
+      f::resistance_mean,   f::resistance_rise,  f::resistance_drop};
+  return names;
+}
+
+const std::vector<std::string>& displacement_feature_names() {
+  namespace f = feature_name;
+  static const std::vector<std::string> names = {
+      f::displacement_peak_expansion, f::displacement_end, f::displacement_net,
+      f::displacement_expansion_rate};
+  return names;
+}
+
+const std::vector<std::string>& temperature_feature_names() {
+  namespace f = feature_name;
+  static const std::vector<std::string> names = {f::temperature_max, f::time_temperature_max,
+                                                 f::temperature_end, f::cooling_rate};
+  return names;
+}
+
+const std::vector<std::string>& nugget_feature_names() {
+  namespace f = feature_name;
+  static const std::vector<std::string> names = {
+      f::nugget_diameter_liquidus, f::nugget_height_liquidus, f::nugget_diameter_solidus,
+      f::nugget_height_solidus,    f::electrode_contact_width, f::indentation_depth,
+      f::unmolten_thickness};
+  return names;
+}
+
+WeldStage find_weld_stage(const Signal& signal, double current_fraction) {
+  if (!(current_fraction > 0 && current_fraction < 1)) {
+    throw FeatureError("the weld-stage current fraction must lie in (0, 1), got " +
+                       number(current_fraction));
+  }
+  if (!signal.has_column(signal_column::current)) {
+    throw FeatureError("the signal has no 'current' column; the weld stage is found from it");
+  }
+  const Eigen::VectorXd& time = signal.time();
+  const Eigen::VectorXd current = signal.column(signal_column::current).cwiseAbs();
+  const Eigen::Index n = current.size();
+  if (n < 2) throw FeatureError("the signal has fewer than two samples (signal too short)");
+
+  WeldStage stage;
+  stage.peak_current = current.maxCoeff();
+  if (!(stage.peak_current > 0)) {
+    throw FeatureError("no current pulse: the current is zero over the whole record");
+  }
+  const double threshold = current_fraction * stage.peak_current;
+  if ((current.array() >= threshold).all()) {
+    throw FeatureError("no current pulse: |I| stays above " + number(100 * current_fraction) +
+                       " % of its peak " + number(stage.peak_current) +
+                       " A over the whole record, so the weld stage has no start or end");
+  }
+  Eigen::Index first = 0;
+  while (current[first] < threshold) ++first;
+  Eigen::Index last = n - 1;
+  while (current[last] < threshold) --last;
+  auto crossing = [&](Eigen::Index below, Eigen::Index above) {
+    const double weight = (threshold - current[below]) / (current[above] - current[below]);
+    return time[below] + weight * (time[above] - time[below]);
+  };
+  stage.start = first == 0 ? time[0] : crossing(first - 1, first);
+  stage.end = last == n - 1 ? time[n - 1] : crossing(last + 1, last);
+  return stage;
+}
+
+void FeatureValues::add(const std::string& name, double value) {
+  if (has(name)) throw FeatureError("feature '" + name + "' is given twice");
+  names_.push_back(name);
+  values_.push_back(value);
+}
+
+bool FeatureValues::has(const std::string& name) const {
+  return std::find(names_.begin(), names_.end(), name) != names_.end();
+}
+
+double FeatureValues::at(const std::string& name) const {
+  const auto it = std::find(names_.begin(), names_.end(), name);
+  if (it == names_.end()) {
+    std::string available;
+    for (const auto& other : names_) available += (available.empty() ? "" : ", ") + other;
+    throw FeatureError("no feature '" + name + "' (extracted: " +
+                       (available.empty() ? std::string("none") : available) + ")");
+  }
+  return values_[static_cast<std::size_t>(it - names_.begin())];
+}
+
+Eigen::VectorXd FeatureValues::select(const std::vector<std::string>& names) const {
+  Eigen::VectorXd result(static_cast<Eigen::Index>(names.size()));
+  for (std::size_t i = 0; i < names.size(); ++i) result[static_cast<Eigen::Index>(i)] = at(names[i]);
+  return result;
+}
+
+FeatureValues extract_features(const Signal& signal, const FeatureSettings& settings,
+                               const std::vector<std::pair<std::string, double>>& scalars) {
+  if (!(settings.trim_margin >= 0) || !(settings.resample_step >= 0) ||
+      !(settings.post_weld_window >= 0)) {
+    throw FeatureError("feature settings: trim_margin, resample_step and post_weld_window "
+                       "must not be negative");
+  }
+  const WeldStage stage = find_weld_stage(signal, settings.weld_current_fraction);
+  const SavitzkyGolayFilter filter(settings.smoothing_window, settings.smoothing_order);
+  const double step =
+      settings.resample_step > 0 ? settings.resample_step : median_step(signal.time());
+
+  FeatureValues features;
+  const bool has_resistance = signal.has_column(signal_column::resistance) ||
+                              signal.has_column(signal_column::voltage);
+  if (has_resistance) {
+    add_resistance_features(signal, stage, step, settings, filter, features);
+  }
+  if (signal.has_column(signal_column::displacement)) {
+    add_displacement_features(signal, stage, step, settings, filter, features);
+  }
+  if (signal.has_column(signal_column::temperature)) {
+    add_temperature_features(signal, stage, step, settings, filter, features);
+  }
+  for (const auto& [name, value] : scalars) {
+    if (!std::isfinite(value)) throw FeatureError("scalar feature '" + name + "' is not finite");
+    features.add(name, value);
+  }
+  if (features.size() == 0) {
+    throw FeatureError("nothing to extract: the signal has none of the columns 'resistance' "
+                       "or 'voltage', 'displacement', 'temperature', and no scalars were given");
+  }
+  return features;
+}
+
+}  // namespace rsw::calibration

@@ -1,0 +1,74 @@
+// The forward model as the calibration library sees it: a black box
+//     M : θ (physical parameter values) → y (named scalar features)
+// that either returns the feature values or fails with a reason.
+//
+// Everything in calibration/ (designs, sensitivity analysis, likelihood, SBALC) knows
+// the simulator only through this interface; the simulator side implements it.
+// A failed run (no convergence, a feature that cannot be extracted) is an ordinary
+// value, not an exception, so that a design of many runs records each failure with
+// its reason and excludes it visibly (paper §2.3: one of 90 runs failed, 88 used).
+//
+// Units: θ in the units of ParameterSpace (SI), features in SI (temperatures in °C),
+// both ordered as parameter_names() / feature_names().
+#pragma once
+
+#include <Eigen/Core>
+
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace rsw::calibration {
+
+class EvaluationResult {
+ public:
+  static EvaluationResult success(Eigen::VectorXd feature_values) {
+    EvaluationResult result;
+    result.ok_ = true;
+    result.features_ = std::move(feature_values);
+    return result;
+  }
+  static EvaluationResult failure(std::string reason) {
+    EvaluationResult result;
+    result.ok_ = false;
+    result.failure_reason_ = std::move(reason);
+    return result;
+  }
+
+  bool ok() const { return ok_; }
+
+  // Feature values in the order of ForwardModel::feature_names(); only for ok() results.
+  const Eigen::VectorXd& features() const {
+    if (!ok_) {
+      throw std::logic_error("EvaluationResult::features() called on a failed evaluation (" +
+                             failure_reason_ + ")");
+    }
+    return features_;
+  }
+
+  // Why the evaluation failed; empty for ok() results.
+  const std::string& failure_reason() const { return failure_reason_; }
+
+ private:
+  EvaluationResult() = default;
+  bool ok_ = false;
+  Eigen::VectorXd features_;
+  std::string failure_reason_;
+};
+
+class ForwardModel {
+ public:
+  virtual ~ForwardModel() = default;
+
+  virtual std::vector<std::string> parameter_names() const = 0;
+  virtual std::vector<std::string> feature_names() const = 0;
+
+  // θ in physical units, one entry per parameter name. Must not throw for a failed
+  // run: failures are returned as EvaluationResult::failure. Calls may come from
+  // several threads at once; an implementation that cannot run concurrently must
+  // serialise internally.
+  virtual EvaluationResult evaluate(const Eigen::VectorXd& theta_physical) const = 0;
+};
+
+}  // namespace rsw::calibration

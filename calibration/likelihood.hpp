@@ -1,0 +1,72 @@
+// Gaussian log-likelihood of named scalar features (paper §2.4, CALIBRATION.md §4).
+//
+// With N_obs observed replicates Y^(k) (k = 1 … N_obs) of p features and the model
+// response M(θ), the measurement errors are taken as independent, zero mean, with a
+// diagonal covariance Σ = diag(σ_j² + δ_j²):
+//     ln L(θ) = −½ Σ_k r_kᵀ Σ⁻¹ r_k − (N_obs/2) ln det(2πΣ),   r_k = Y^(k) − M(θ).
+// The normalising term is constant in θ; it is kept so that the evidence of SBALC is
+// the true marginal density of the data. Σ is diagonal because the features are
+// scalars of distinct physical origin, not an autocorrelated time series (paper §2.4).
+// The measurement standard deviations σ_j come from one of
+//   - given values per feature (feature units);
+//   - a fraction of the observed mean, σ_j = fraction · |Ȳ_j|;
+//   - the scatter of the replicates, σ_j = sample standard deviation (N_obs − 1
+//     denominator; needs N_obs ≥ 2).
+// δ_j² is an optional fixed model-discrepancy variance per feature, added to Σ as in
+// Kennedy & O'Hagan (2001, "Bayesian calibration of computer models") with the
+// discrepancy reduced to a known variance. Features are matched by name; every σ_j² + δ_j²
+// must be positive and finite, otherwise construction fails naming the feature.
+// Units: ln L is dimensionless (log of a density in feature units^(−p·N_obs)).
+#pragma once
+
+#include <Eigen/Core>
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace rsw::calibration {
+
+struct ObservationNoise {
+  enum class Kind { GivenStandardDeviations, RelativeToObservedMean, ReplicateScatter };
+  Kind kind = Kind::ReplicateScatter;
+  std::map<std::string, double> standard_deviations;  // GivenStandardDeviations, by feature name
+  double relative_fraction = 0.0;                     // RelativeToObservedMean
+
+  static ObservationNoise given(std::map<std::string, double> standard_deviations);
+  static ObservationNoise relative(double fraction);
+  static ObservationNoise replicate_scatter();
+};
+
+class GaussianLikelihood {
+ public:
+  // observations: N_obs × p, column j is feature feature_names[j].
+  // discrepancy_variances: δ_j² by feature name (feature units²); features not named get 0;
+  // a name that is not an observed feature is an error.
+  GaussianLikelihood(std::vector<std::string> feature_names, Eigen::MatrixXd observations, ObservationNoise noise,
+                     const std::map<std::string, double>& discrepancy_variances = {});
+
+  // Model features in the order of feature_names().
+  double log_likelihood(const Eigen::VectorXd& model_features) const;
+  // Model features by name; may contain more features than observed ones (ignored).
+  // Throws std::invalid_argument naming the first observed feature that is missing.
+  double log_likelihood(const std::vector<std::string>& names, const Eigen::VectorXd& values) const;
+  double log_likelihood(const std::map<std::string, double>& model_features) const;
+
+  const std::vector<std::string>& feature_names() const { return feature_names_; }
+  int n_features() const { return static_cast<int>(feature_names_.size()); }
+  int n_replicates() const { return static_cast<int>(observations_.rows()); }
+  const Eigen::MatrixXd& observations() const { return observations_; }
+  const Eigen::VectorXd& measurement_variances() const { return measurement_variances_; }  // σ_j²
+  const Eigen::VectorXd& variances() const { return variances_; }                          // σ_j² + δ_j²
+  double log_normalisation() const { return log_normalisation_; }  // −(N_obs/2) ln det(2πΣ)
+
+ private:
+  std::vector<std::string> feature_names_;
+  Eigen::MatrixXd observations_;
+  Eigen::VectorXd measurement_variances_;
+  Eigen::VectorXd variances_;
+  double log_normalisation_ = 0.0;
+};
+
+}  // namespace rsw::calibration

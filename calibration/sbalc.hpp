@@ -1,0 +1,158 @@
+// SBALC: Streamlined Bayesian Active Learning Cubature (Li et al. 2025), with a nugget
+// for deterministic numerical noise (paper §2.5, §3.3; CALIBRATION.md §5–6).
+//
+// Works in the standardised parameter space where the prior is uniform on [0, 1]^d
+// (callers map θ_std to physical values through the inverse prior CDFs). The evidence
+//     c = ∫ L(θ) f(θ) dθ = E_prior[exp ℒ(θ)]
+// is estimated from a GP surrogate of the log-likelihood ℒ (gaussian_process.hpp)
+// with latent mean m(θ) and latent standard deviation s(θ) after n evaluations:
+//     ĉ       = E_prior[exp(m)]              (paper eq. 9)
+//     c_upper = E_prior[exp(m + b s)],   c_lower = E_prior[exp(m − b s)],   b = 1,
+// each a Monte Carlo mean over a seeded pool of N_M prior samples (default 2·10⁴),
+// evaluated as log-sum-exp minus ln N_M, so nothing overflows however large |ℒ| is.
+// The next evaluation maximises over the pool the learning function (paper eq. 10)
+//     LF = s² (e^{m + b s} − e^{m − b s}),
+//     ln LF = 2 ln s + m + b s + ln(1 − e^{−2 b s})          (s > 0; LF = 0 at s = 0),
+// skipping pool points already chosen (evaluated or failed). Iterations stop when
+//     ratio = (c_upper − c_lower)/ĉ = e^{ln c_upper − ln ĉ} − e^{ln c_lower − ln ĉ}
+// is below the tolerance (0.1) on n_consecutive (2) consecutive iterations, or when the
+// evaluation cap is reached (result.converged = false). The initial design is n_0 = 5
+// Hammersley points kept off the faces of the box (calibration/designs.hpp).
+//
+// Nugget extension (CALIBRATION.md §6). The FE log-likelihood carries reproducible
+// discretisation noise; an interpolating GP chases it, its s never shrinks between
+// points and SBALC does not converge (paper §3.3). With gp.nugget_mode = Estimated (or
+// Fixed) the GP separates a smooth latent ℒ from noise of variance τ² (Gramacy & Lee
+// 2012). Then:
+//   - ĉ, the bounds, LF and the ratio use the latent m and s only; τ² never enters them,
+//     so the noise does not keep the bounds apart. ĉ is the evidence of the smooth
+//     latent log-likelihood.
+//   - The tolerance accounts for the noise. The latent variance splits as
+//         s² = s₀² + s_τ²,
+//     where s₀² is the latent variance the same GP (same hyperparameters) would have
+//     with noise-free observations at the same design points (the gaps in the design),
+//     and s_τ² = s² − s₀² ≥ 0 is what the noise in the observations adds (only
+//     averaging over more nearby points reduces it, like τ·√(df/n)). With
+//         ratio_τ = (E[e^{m + b s_τ}] − E[e^{m − b s_τ}]) / ĉ,
+//     the noise-induced spread of the bounds, the stopping test is
+//         ratio < tolerance_used = √(tolerance² + ratio_τ²).
+//     For small s the ratio is ≈ 2b E_post[s], and s² = s₀² + s_τ², so this asks the
+//     part of the spread due to gaps in the design, ≈ √(ratio² − ratio_τ²), to be below
+//     the tolerance, while the part caused by the noise is accepted and reported
+//     (ratio_τ per iteration, so the noise-limited accuracy is visible). Without a nugget, s_τ = 0 and the test is the
+//     paper's. (Requiring ratio < tolerance alone would demand n ∝ τ²/tolerance²
+//     evaluations once the noise dominates, which for FE noise means no convergence.)
+//     Option noise_aware_tolerance = false restores the plain test (so does an
+//     iteration whose noise-free matrix cannot be factorised within the jitter cap).
+//   - Diagnostics report the noise standard deviation τ = √τ² in log-likelihood units.
+//
+// Batches: with batch_size = q > 1 each iteration picks q points by the kriging
+// believer (Ginsbourger et al. 2010): after choosing a point, the GP is conditioned on
+// its own mean there (hyperparameters kept), which leaves m unchanged and shrinks s
+// nearby, and the next point maximises LF of that GP. The q points go to the batch
+// evaluator together, so a caller can run them in parallel.
+//
+// Failures: an evaluation that returns no value (or a non-finite one, or throws) is
+// recorded with its point and reason and excluded from the GP; its pool point is never
+// proposed again. Failed evaluations count towards the cap. Having no data there, the
+// GP would keep a large s around a failure and LF would keep proposing its
+// neighbourhood; so for choosing points (only) the GP is also conditioned on each failed
+// point at its own mean (kriging believer), which leaves m unchanged and removes s
+// near failures. ĉ, the bounds and the ratio use the successful evaluations only, so a
+// failing region with posterior mass keeps the ratio open, as it should.
+// Deterministic for a fixed seed: pool, GP restarts and tie breaks derive from it.
+#pragma once
+
+#include "calibration/gaussian_process.hpp"
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace rsw::calibration {
+
+// ℒ(θ_std), or no value for a failed evaluation.
+using LogLikelihoodFunction = std::function<std::optional<double>(const Eigen::VectorXd& theta_std)>;
+// ℒ at several points (e.g. run in parallel by the caller), one entry per point in order.
+using BatchLogLikelihoodFunction =
+    std::function<std::vector<std::optional<double>>(const std::vector<Eigen::VectorXd>& thetas_std)>;
+
+// ln Σ_i exp(v_i), stable for any magnitude; −∞ for an empty vector or all −∞.
+double log_sum_exp(const Eigen::VectorXd& values);
+
+struct SbalcOptions {
+  int n_initial = 5;              // n_0 Hammersley points (ignored with initial_design)
+  int pool_size = 20000;          // N_M prior samples
+  std::uint64_t seed = 1;
+  double bound_width = 1.0;       // b
+  double tolerance = 0.1;         // on (c_upper − c_lower)/ĉ
+  int n_consecutive = 2;
+  int max_evaluations = 100;      // cap on all evaluations, initial design and failures included
+  int batch_size = 1;             // q points per iteration (kriging believer)
+  bool noise_aware_tolerance = true;  // tolerance_used = √(tolerance² + ratio_τ²) (with a nugget)
+  GaussianProcessOptions gp;      // kernel, trend, nugget; its seed is replaced by one derived from `seed`
+  std::optional<Eigen::MatrixXd> initial_design;  // rows in [0,1]^d, replaces the Hammersley design
+};
+
+struct SbalcIteration {
+  int n_points = 0;        // successful evaluations in the GP
+  int n_evaluations = 0;   // all evaluations so far
+  double log_evidence = 0.0;        // ln ĉ
+  double log_evidence_upper = 0.0;  // ln c_upper
+  double log_evidence_lower = 0.0;  // ln c_lower
+  double ratio = 0.0;               // (c_upper − c_lower)/ĉ
+  double noise_ratio = 0.0;         // ratio_τ, the spread due to the noise (0 without nugget)
+  double tolerance_used = 0.0;      // √(tolerance² + ratio_τ²), or tolerance
+  GaussianProcessHyperparameters hyperparameters;
+  double noise_standard_deviation = 0.0;  // τ, log-likelihood units
+  double jitter = 0.0;
+  TrendType trend_used = TrendType::Constant;
+  Eigen::MatrixXd chosen_points;     // rows; empty on the last iteration
+  double log_learning_function = 0.0;  // ln LF of the first chosen point
+};
+
+struct SbalcFailedEvaluation {
+  Eigen::VectorXd theta;
+  std::string reason;
+};
+
+struct SbalcResult {
+  bool converged = false;
+  std::string stop_reason;
+  double log_evidence = 0.0;  // ln ĉ of the last GP
+  double log_evidence_upper = 0.0;
+  double log_evidence_lower = 0.0;
+  double ratio = 0.0;
+  double noise_ratio = 0.0;               // ratio_τ of the last GP
+  double noise_standard_deviation = 0.0;  // τ of the last GP, log-likelihood units
+  int n_evaluations = 0;                  // all, failed included
+  Eigen::MatrixXd design;                 // successful points, rows in [0,1]^d
+  Eigen::VectorXd log_likelihoods;        // ℒ at design rows
+  std::vector<SbalcFailedEvaluation> failures;
+  std::vector<SbalcIteration> history;
+  std::optional<GaussianProcess> surrogate;  // last GP (absent if fewer than two successes)
+  Eigen::MatrixXd pool;                      // N_M × d prior samples
+  Eigen::VectorXd pool_mean;                 // m at the pool points (last GP)
+  Eigen::VectorXd pool_latent_sd;            // s at the pool points (last GP)
+
+  double evidence() const;  // exp(log_evidence); may under/overflow, prefer the log
+};
+
+class Sbalc {
+ public:
+  Sbalc(int dimension, LogLikelihoodFunction log_likelihood, SbalcOptions options = {});
+  Sbalc(int dimension, BatchLogLikelihoodFunction batch_log_likelihood, SbalcOptions options = {});
+
+  SbalcResult run() const;
+
+ private:
+  int dimension_;
+  BatchLogLikelihoodFunction evaluate_;
+  SbalcOptions options_;
+};
+
+}  // namespace rsw::calibration

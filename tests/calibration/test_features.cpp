@@ -1,0 +1,532 @@
+// Signals and features (calibration/signal.*, calibration/features.*): the
+// Savitzky–Golay filter against its closed form, the weld-stage detection, and every
+// feature group on synthetic welds whose curves are cubics in time, so the expected
+// values follow analytically (the filter and the Hermite curve reproduce cubics
+// exactly). Also the CSV reader: units, errors, and like-for-like features.
+#include "calibration/features.hpp"
+#include "calibration/signal.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <string>
+
+namespace rsw::calibration {
+namespace {
+
+// ---------------------------------------------------------------------------------
+// A synthetic weld on a 0.5 ms raw grid from 0 to 130 ms. The current ramps over one
+// millisecond around 10 ms and 110 ms, so with a 50 % threshold the weld stage is
+// exactly [10, 110] ms. With τ = t − 10 ms:
+//   R(τ) = R0 + k [s² (τ − τ_a) − (τ − τ_a)³ / 3]  steepest rise at τ_a, peak at τ_a + s
+//   S(τ) = a0 + a1 τ + a2 τ² + a3 τ³
+//   T(τ) = 20 + c τ² (3 τ_p − 2 τ) / τ_p³         peak c + 20 at τ_p
+constexpr double raw_step = 0.5e-3;
+constexpr double weld_start = 10e-3;
+constexpr double weld_end = 110e-3;
+constexpr double record_end = 130e-3;
+constexpr double peak_current = 8e3;
+
+struct ResistanceShape {
+  double r0 = 150e-6;     // Ω
+  double k = 0.9375;      // Ω/s³
+  double tau_a = 30e-3;   // s
+  double s = 40e-3;       // s
+  double value(double tau) const {
+    const double u = tau - tau_a;
+    return r0 + k * (s * s * u - u * u * u / 3);
+  }
+  // ∫ R dτ
+  double antiderivative(double tau) const {
+    const double u = tau - tau_a;
+    return r0 * tau + k * (s * s * u * u / 2 - u * u * u * u / 12);
+  }
+};
+
+constexpr double s_coefficients[] = {2e-6, 0.9e-3, -5e-3, -4e-3};  // m, m/s, m/s², m/s³
+double displacement(double tau) {
+  return s_coefficients[0] + tau * (s_coefficients[1] + tau * (s_coefficients[2] + tau * s_coefficients[3]));
+}
+
+constexpr double temperature_rise = 1500;  // °C
+constexpr double tau_temperature_peak = 100e-3;
+double temperature(double tau) {
+  const double p = tau_temperature_peak;
+  return 20 + temperature_rise * tau * tau * (3 * p - 2 * tau) / (p * p * p);
+}
+
+double weld_current(double t) {
+  auto ramp = [](double x) { return std::clamp(x, 0.0, 1.0); };
+  return peak_current * ramp((t - 9.5e-3) / 1e-3) * ramp((110.5e-3 - t) / 1e-3);
+}
+
+struct SyntheticOptions {
+  bool voltage = true;  // else a resistance column
+  bool displacement = true;
+  bool temperature = true;
+};
+
+Signal synthetic_weld(const ResistanceShape& shape, const SyntheticOptions& options = {}) {
+  const int n = static_cast<int>(std::lround(record_end / raw_step)) + 1;
+  Eigen::VectorXd time(n), current(n), voltage(n), resistance(n), s(n), temp(n);
+  for (int i = 0; i < n; ++i) {
+    const double t = i * raw_step;
+    const double tau = t - weld_start;
+    time[i] = t;
+    current[i] = weld_current(t);
+    resistance[i] = shape.value(tau);
+    voltage[i] = resistance[i] * current[i];
+    s[i] = displacement(tau);
+    temp[i] = temperature(tau);
+  }
+  Signal signal(time);
+  signal.add_column(signal_column::current, "A", current);
+  if (options.voltage) {
+    signal.add_column(signal_column::voltage, "V", voltage);
+  } else {
+    signal.add_column(signal_column::resistance, "ohm", resistance);
+  }
+  if (options.displacement) signal.add_column(signal_column::displacement, "m", s);
+  if (options.temperature) signal.add_column(signal_column::temperature, "degC", temp);
+  return signal;
+}
+
+FeatureSettings half_current_threshold() {
+  FeatureSettings settings;
+  settings.weld_current_fraction = 0.5;
+  return settings;
+}
+
+// Relative comparison for features of very different magnitudes.
+void expect_relative(double actual, double expected, double tolerance, const std::string& what) {
+  EXPECT_NEAR(actual, expected, tolerance * std::abs(expected)) << what;
+}
+
+// ---------------------------------------------------------------------------------
+
+TEST(SavitzkyGolay, CubicWindow11CoefficientsMatchClosedForm) {
+  const SavitzkyGolayFilter filter(11, 3);
+  const double closed_form[] = {-36, 9, 44, 69, 84, 89, 84, 69, 44, 9, -36};
+  const Eigen::VectorXd weights = filter.weights(0);
+  ASSERT_EQ(weights.size(), 11);
+  for (int j = 0; j < 11; ++j) EXPECT_NEAR(weights[j], closed_form[j] / 429, 1e-14) << "j = " << j;
+}
+
+TEST(SavitzkyGolay, CubicsPassUnchangedIncludingEdges) {
+  const SavitzkyGolayFilter filter(11, 3);
+  const double step = 0.25;
+  const int n = 30;
+  Eigen::VectorXd values(n), slopes(n);
+  for (int i = 0; i < n; ++i) {
+    const double x = i * step;
+    values[i] = 1.5 - 2 * x + 0.7 * x * x - 0.09 * x * x * x;
+    slopes[i] = -2 + 1.4 * x - 0.27 * x * x;
+  }
+  const Eigen::VectorXd smoothed = filter.smooth(values);
+  const Eigen::VectorXd smoothed_slope = filter.slope(values, step);
+  for (int i = 0; i < n; ++i) {
+    EXPECT_NEAR(smoothed[i], values[i], 1e-12) << "sample " << i;
+    EXPECT_NEAR(smoothed_slope[i], slopes[i], 1e-11) << "sample " << i;
+  }
+}
+
+TEST(SavitzkyGolay, QuarticIsNotPassedUnchanged) {
+  // The filter is a cubic fit: a quartic shows that it really smooths.
+  const SavitzkyGolayFilter filter(11, 3);
+  Eigen::VectorXd values(21);
+  for (int i = 0; i < 21; ++i) values[i] = std::pow(i - 10.0, 4);
+  const Eigen::VectorXd smoothed = filter.smooth(values);
+  // Centre value of the least-squares cubic through j⁴, j = −5..5: Σ w_j j⁴ = −4.3̅ ≠ 0.
+  EXPECT_NEAR(smoothed[10], filter.weights(0).dot(values.segment(5, 11)), 1e-12);
+  EXPECT_GT(std::abs(smoothed[10] - values[10]), 1.0);
+}
+
+TEST(SavitzkyGolay, TooShortSignalIsAnError) {
+  const SavitzkyGolayFilter filter(11, 3);
+  EXPECT_THROW(filter.smooth(Eigen::VectorXd::Ones(10)), SignalError);
+  EXPECT_THROW(SavitzkyGolayFilter(10, 3), std::invalid_argument);
+  EXPECT_THROW(SavitzkyGolayFilter(3, 3), std::invalid_argument);
+}
+
+TEST(Resampling, LinearInterpolationOntoGridAnchoredAtAGivenTime) {
+  Signal signal((Eigen::VectorXd(4) << 0.0, 1.0, 1.5, 4.0).finished());
+  signal.add_column("force", "N", (Eigen::VectorXd(4) << 0.0, 2.0, 3.0, 8.0).finished());
+  // Anchor 0.25, step 1: grid 0.25, 1.25, 2.25, 3.25 inside [0, 4]; force is 2t.
+  const Signal resampled = resample_uniform(signal, 1.0, 0.25);
+  ASSERT_EQ(resampled.n_samples(), 4u);
+  for (Eigen::Index k = 0; k < 4; ++k) {
+    EXPECT_DOUBLE_EQ(resampled.time()[k], 0.25 + static_cast<double>(k));
+    EXPECT_DOUBLE_EQ(resampled.column("force")[k], 2 * resampled.time()[k]);
+  }
+  EXPECT_EQ(resampled.unit("force"), "N");
+  EXPECT_DOUBLE_EQ(median_step(signal.time()), 1.0);  // steps 1, 0.5, 2.5
+  EXPECT_THROW(resample_uniform(signal, 0, 0), SignalError);
+  EXPECT_THROW(Signal((Eigen::VectorXd(3) << 0.0, 1.0, 1.0).finished()), SignalError);
+  EXPECT_THROW(signal.add_column("force", "N", Eigen::VectorXd::Zero(4)), SignalError);
+  EXPECT_THROW(signal.column("voltage"), SignalError);
+}
+
+TEST(SmoothCurve, ReproducesCubicBetweenSamplesWithExtremaOffTheGrid) {
+  // y = −(t − 0.37)² (t − 2) = −t³ + 2.74 t² − 1.6169 t + 0.2738: critical points where
+  // 3t² − 5.48 t + 1.6169 = 0, a minimum at 0.37 and a maximum at 4.37/3.
+  auto y = [](double t) { return -(t - 0.37) * (t - 0.37) * (t - 2); };
+  auto dy = [](double t) { return -(2 * (t - 0.37) * (t - 2) + (t - 0.37) * (t - 0.37)); };
+  const double step = 0.1;
+  const int n = 18;
+  Eigen::VectorXd values(n), slopes(n);
+  for (int i = 0; i < n; ++i) {
+    values[i] = y(i * step);
+    slopes[i] = dy(i * step);
+  }
+  const SmoothCurve curve(0, step, values, slopes);
+  EXPECT_NEAR(curve.value(0.537), y(0.537), 1e-14);
+  EXPECT_NEAR(curve.slope(1.234), dy(1.234), 1e-13);
+  const double root = (5.48 + std::sqrt(5.48 * 5.48 - 12 * 1.6169)) / 6;  // the maximum
+  // Over [0.5, 1.49] the maximum is the interior critical point, between samples.
+  const CurvePoint peak = curve.trimmed(0.5, 1.49).maximum();
+  EXPECT_NEAR(peak.time, root, 1e-12);
+  EXPECT_NEAR(peak.value, y(root), 1e-14);
+  // Mean over [0.25, 1.05] of the cubic, by its antiderivative.
+  auto integral = [](double t) {
+    return -t * t * t * t / 4 + 2.74 * t * t * t / 3 - 1.6169 * t * t / 2 + 0.2738 * t;
+  };
+  EXPECT_NEAR(curve.trimmed(0.25, 1.05).mean(), (integral(1.05) - integral(0.25)) / 0.8, 1e-13);
+  EXPECT_THROW(curve.trimmed(-0.1, 0.5), SignalError);
+}
+
+TEST(WeldStage, CrossingTimesAreInterpolatedBetweenSamples) {
+  const Signal signal = synthetic_weld(ResistanceShape{});
+  const WeldStage half = find_weld_stage(signal, 0.5);
+  EXPECT_NEAR(half.start, weld_start, 1e-15);
+  EXPECT_NEAR(half.end, weld_end, 1e-15);
+  EXPECT_DOUBLE_EQ(half.peak_current, peak_current);
+  // 10 % of the peak is crossed 0.1 ms into the 1 ms ramps, between raw samples.
+  const WeldStage tenth = find_weld_stage(signal, 0.1);
+  EXPECT_NEAR(tenth.start, 9.6e-3, 1e-15);
+  EXPECT_NEAR(tenth.end, 110.4e-3, 1e-15);
+}
+
+TEST(WeldStage, SignalWithoutCurrentPulseIsAnError) {
+  Eigen::VectorXd time = Eigen::VectorXd::LinSpaced(50, 0, 49e-3);
+  Signal zero(time);
+  zero.add_column(signal_column::current, "A", Eigen::VectorXd::Zero(50));
+  EXPECT_THROW(find_weld_stage(zero, 0.1), FeatureError);
+  Signal constant(time);
+  constant.add_column(signal_column::current, "A", Eigen::VectorXd::Constant(50, 8e3));
+  try {
+    find_weld_stage(constant, 0.1);
+    FAIL() << "constant current accepted as a pulse";
+  } catch (const FeatureError& error) {
+    EXPECT_NE(std::string(error.what()).find("no current pulse"), std::string::npos) << error.what();
+  }
+  Signal no_current(time);
+  no_current.add_column(signal_column::voltage, "V", Eigen::VectorXd::Ones(50));
+  EXPECT_THROW(extract_features(no_current), FeatureError);
+}
+
+TEST(DynamicResistance, FeaturesOfCubicCurveMatchClosedForm) {
+  const ResistanceShape shape;
+  const FeatureValues features = extract_features(synthetic_weld(shape), half_current_threshold());
+  const double t_alpha = shape.tau_a;
+  const double t_beta = shape.tau_a + shape.s;
+  const double t_gamma = (weld_end - weld_start) - 2e-3;
+  const double r_alpha = shape.value(t_alpha);
+  const double r_beta = shape.value(t_beta);
+  const double r_gamma = shape.value(t_gamma);
+  const double tolerance = 1e-9;
+  namespace f = feature_name;
+  EXPECT_NEAR(features.at(f::time_alpha), t_alpha, 1e-9);
+  EXPECT_NEAR(features.at(f::time_beta), t_beta, 1e-9);
+  EXPECT_NEAR(features.at(f::time_gamma), t_gamma, 1e-12);
+  expect_relative(features.at(f::resistance_alpha), r_alpha, tolerance, "R_alpha");
+  expect_relative(features.at(f::resistance_beta), r_beta, tolerance, "R_beta");
+  expect_relative(features.at(f::resistance_gamma), r_gamma, tolerance, "R_gamma");
+  expect_relative(features.at(f::slope_before_peak), (r_beta - r_alpha) / (t_beta - t_alpha),
+                  tolerance, "m_1");
+  expect_relative(features.at(f::slope_after_peak), (r_gamma - r_beta) / (t_gamma - t_beta),
+                  tolerance, "m_2");
+  const double t_s = 2e-3;
+  expect_relative(features.at(f::resistance_mean),
+                  (shape.antiderivative(t_gamma) - shape.antiderivative(t_s)) / (t_gamma - t_s),
+                  tolerance, "R_m");
+  expect_relative(features.at(f::resistance_rise), r_beta - r_alpha, tolerance, "dR_1");
+  expect_relative(features.at(f::resistance_drop), r_gamma - r_beta, tolerance, "dR_2");
+  EXPECT_EQ(features.names().front(), f::resistance_alpha);
+}
+
+TEST(DynamicResistance, InflectionAndPeakTimesAreNotQuantisedToTheSampleGrid) {
+  // Shifting the curve by 0.13 ms (a quarter of a sample step and more) shifts t_alpha
+  // and t_beta by exactly that, not by whole samples.
+  ResistanceShape shifted;
+  shifted.tau_a += 0.13e-3;
+  const FeatureValues base = extract_features(synthetic_weld(ResistanceShape{}), half_current_threshold());
+  const FeatureValues moved = extract_features(synthetic_weld(shifted), half_current_threshold());
+  namespace f = feature_name;
+  EXPECT_NEAR(moved.at(f::time_alpha) - base.at(f::time_alpha), 0.13e-3, 1e-9);
+  EXPECT_NEAR(moved.at(f::time_beta) - base.at(f::time_beta), 0.13e-3, 1e-9);
+  EXPECT_NEAR(moved.at(f::resistance_beta), base.at(f::resistance_beta), 1e-9 * base.at(f::resistance_beta));
+}
+
+TEST(DynamicResistance, MeasurementNoiseMovesPeakEndAndMeanFeaturesOnlySlightly) {
+  // 0.5 µΩ white noise on the voltage-derived resistance (a 40 µΩ rise): the smoothed
+  // peak, end and mean stay within a few tenths of a µΩ. The peak is flat, R'' = −2ks =
+  // −0.075 Ω/s², so smoothed noise of σ√(89/429) ≈ 0.23 µΩ moves its time by up to
+  // about √(2·0.23 µΩ/0.075 Ω/s²) ≈ 2.5 ms: times are the noise-sensitive features.
+  const ResistanceShape shape;
+  Signal clean = synthetic_weld(shape);
+  std::mt19937_64 rng(99);
+  std::normal_distribution<double> noise(0, 0.5e-6);
+  Eigen::VectorXd voltage = clean.column(signal_column::voltage);
+  const Eigen::VectorXd& current = clean.column(signal_column::current);
+  for (Eigen::Index i = 0; i < voltage.size(); ++i) voltage[i] += noise(rng) * current[i];
+  Signal noisy(clean.time());
+  noisy.add_column(signal_column::current, "A", current);
+  noisy.add_column(signal_column::voltage, "V", voltage);
+  const FeatureValues a = extract_features(clean, half_current_threshold());
+  const FeatureValues b = extract_features(noisy, half_current_threshold());
+  namespace f = feature_name;
+  EXPECT_NEAR(b.at(f::resistance_beta), a.at(f::resistance_beta), 0.4e-6);
+  EXPECT_NEAR(b.at(f::resistance_gamma), a.at(f::resistance_gamma), 0.4e-6);
+  EXPECT_NEAR(b.at(f::resistance_mean), a.at(f::resistance_mean), 0.1e-6);
+  EXPECT_NEAR(b.at(f::time_beta), a.at(f::time_beta), 5e-3);
+  EXPECT_LT(b.at(f::time_alpha), b.at(f::time_beta));
+}
+
+TEST(DynamicResistance, ResistanceColumnGivesTheSameFeaturesAsVoltage) {
+  SyntheticOptions from_resistance;
+  from_resistance.voltage = false;
+  const FeatureValues a = extract_features(synthetic_weld(ResistanceShape{}), half_current_threshold());
+  const FeatureValues b =
+      extract_features(synthetic_weld(ResistanceShape{}, from_resistance), half_current_threshold());
+  ASSERT_EQ(a.names(), b.names());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_NEAR(a.values()[i], b.values()[i], 1e-9 * std::abs(a.values()[i]) + 1e-15) << a.names()[i];
+  }
+}
+
+TEST(DynamicResistance, MonotoneResistanceHasNoPeakAndSaysSo) {
+  ResistanceShape rising;
+  rising.tau_a = 90e-3;  // steepest at 90 ms, peak at 130 ms: past the weld end
+  try {
+    extract_features(synthetic_weld(rising), half_current_threshold());
+    FAIL() << "a resistance still rising at the weld end was given a peak";
+  } catch (const FeatureError& error) {
+    EXPECT_NE(std::string(error.what()).find("no peak"), std::string::npos) << error.what();
+  }
+}
+
+TEST(Displacement, FeaturesOfCubicCurveMatchClosedForm) {
+  const FeatureValues features = extract_features(synthetic_weld(ResistanceShape{}), half_current_threshold());
+  // Peak: S'(τ) = a1 + 2 a2 τ + 3 a3 τ² = 0, positive root.
+  const double a1 = s_coefficients[1], a2 = s_coefficients[2], a3 = s_coefficients[3];
+  const double tau_peak = (-2 * a2 - std::sqrt(4 * a2 * a2 - 12 * a3 * a1)) / (6 * a3);
+  ASSERT_GT(tau_peak, 2e-3);
+  ASSERT_LT(tau_peak, record_end - weld_start);
+  const double t_s = 2e-3;
+  const double tau_end = record_end - weld_start;
+  const double s_0 = displacement(t_s);
+  // Least-squares slope over [t_s, τ_peak]: 12 ∫ (τ − τ̄) S dτ / L³, integrated exactly:
+  // ∫ (τ − τ̄) τ^j dτ = [τ^(j+2)/(j+2) − τ̄ τ^(j+1)/(j+1)].
+  const double length = tau_peak - t_s;
+  const double mid = 0.5 * (tau_peak + t_s);
+  double moment = 0;
+  for (int j = 0; j < 4; ++j) {
+    auto primitive = [&](double tau) {
+      return std::pow(tau, j + 2) / (j + 2) - mid * std::pow(tau, j + 1) / (j + 1);
+    };
+    moment += s_coefficients[j] * (primitive(tau_peak) - primitive(t_s));
+  }
+  const double fitted_slope = 12 * moment / (length * length * length);
+  namespace f = feature_name;
+  expect_relative(features.at(f::displacement_peak_expansion), displacement(tau_peak) - s_0, 1e-9, "dS_P");
+  expect_relative(features.at(f::displacement_end), displacement(tau_end), 1e-9, "S_end");
+  expect_relative(features.at(f::displacement_net), displacement(tau_end) - s_0, 1e-9, "dS_net");
+  expect_relative(features.at(f::displacement_expansion_rate), fitted_slope, 1e-9, "S_dot_exp");
+}
+
+TEST(Temperature, FeaturesOfCubicCurveMatchClosedForm) {
+  const FeatureValues features = extract_features(synthetic_weld(ResistanceShape{}), half_current_threshold());
+  const double tau_end = record_end - weld_start;
+  const double t_max = 20 + temperature_rise;
+  namespace f = feature_name;
+  expect_relative(features.at(f::temperature_max), t_max, 1e-12, "T_max");
+  EXPECT_NEAR(features.at(f::time_temperature_max), tau_temperature_peak, 1e-9);
+  expect_relative(features.at(f::temperature_end), temperature(tau_end), 1e-12, "T_end");
+  expect_relative(features.at(f::cooling_rate),
+                  (temperature(tau_end) - t_max) / (tau_end - tau_temperature_peak), 1e-9, "T_dot_cool");
+}
+
+TEST(Features, PostWeldWindowMovesTheRecordEnd) {
+  FeatureSettings settings = half_current_threshold();
+  settings.post_weld_window = 5e-3;  // record end 115 ms: 105 ms after the weld start
+  const FeatureValues features = extract_features(synthetic_weld(ResistanceShape{}), settings);
+  EXPECT_NEAR(features.at(feature_name::temperature_end), temperature(105e-3), 1e-9);
+  EXPECT_NEAR(features.at(feature_name::displacement_end), displacement(105e-3), 1e-15);
+}
+
+TEST(Features, GroupsFollowTheColumnsAndNuggetScalarsPassThrough) {
+  SyntheticOptions resistance_only;
+  resistance_only.displacement = false;
+  resistance_only.temperature = false;
+  const std::vector<std::pair<std::string, double>> nugget = {
+      {feature_name::nugget_diameter_liquidus, 5.1e-3}, {feature_name::indentation_depth, 42e-6}};
+  const FeatureValues features = extract_features(synthetic_weld(ResistanceShape{}, resistance_only),
+                                                  half_current_threshold(), nugget);
+  std::vector<std::string> expected = resistance_feature_names();
+  expected.push_back(feature_name::nugget_diameter_liquidus);
+  expected.push_back(feature_name::indentation_depth);
+  EXPECT_EQ(features.names(), expected);
+  EXPECT_EQ(features.at(feature_name::nugget_diameter_liquidus), 5.1e-3);
+  EXPECT_THROW(features.at(feature_name::temperature_max), FeatureError);
+  const Eigen::VectorXd selected =
+      features.select({feature_name::indentation_depth, feature_name::nugget_diameter_liquidus});
+  EXPECT_EQ(selected[0], 42e-6);
+  EXPECT_EQ(selected[1], 5.1e-3);
+}
+
+TEST(Features, TooShortWeldStageIsAnError) {
+  // A 4 ms pulse sampled every 0.5 ms: the weld stage (10 % crossings at 3.55 and
+  // 8.45 ms) holds 10 samples, fewer than the smoothing window of 11.
+  const int n = 40;
+  Eigen::VectorXd time(n), current(n), voltage(n);
+  for (int i = 0; i < n; ++i) {
+    time[i] = i * raw_step;
+    current[i] = (time[i] >= 4e-3 && time[i] <= 8e-3) ? 8e3 : 0;
+    voltage[i] = 1e-4 * current[i];
+  }
+  Signal signal(time);
+  signal.add_column(signal_column::current, "A", current);
+  signal.add_column(signal_column::voltage, "V", voltage);
+  try {
+    extract_features(signal);
+    FAIL() << "a 4 ms weld stage was accepted";
+  } catch (const FeatureError& error) {
+    EXPECT_NE(std::string(error.what()).find("too short"), std::string::npos) << error.what();
+  }
+}
+
+// ---------------------------------------------------------------------------------
+// CSV reader
+
+class SignalCsv : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    directory_ = std::filesystem::temp_directory_path() /
+                 ("rsw_test_signal_" + std::to_string(::getpid()) + "_" + info->name());
+    std::filesystem::create_directories(directory_);
+  }
+  void TearDown() override { std::filesystem::remove_all(directory_); }
+
+  std::string write(const std::string& name, const std::string& text) {
+    const auto path = directory_ / name;
+    std::ofstream(path) << text;
+    return path.string();
+  }
+
+  std::filesystem::path directory_;
+};
+
+// The error message of reading `path`, or "" if it reads.
+std::string read_error(const std::string& path) {
+  try {
+    read_signal_csv(path);
+  } catch (const SignalError& error) {
+    return error.what();
+  }
+  return "";
+}
+
+TEST_F(SignalCsv, ReadsEngineeringUnitsIntoSi) {
+  const std::string path = write("weld.csv",
+                                 "# measured on rig 2\n"
+                                 "time [ms], Current [kA], voltage [mV], force [kN], displacement [um], "
+                                 "temperature [K]\n"
+                                 "0, 0, 0, 3.0, 0, 293.15\n"
+                                 "\n"
+                                 "0.5, 8.0, 1200, 3.1, 12.5, 1773.15\n");
+  const Signal signal = read_signal_csv(path);
+  ASSERT_EQ(signal.n_samples(), 2u);
+  EXPECT_DOUBLE_EQ(signal.time()[1], 0.5e-3);
+  EXPECT_DOUBLE_EQ(signal.column(signal_column::current)[1], 8e3);
+  EXPECT_DOUBLE_EQ(signal.column(signal_column::voltage)[1], 1.2);
+  EXPECT_DOUBLE_EQ(signal.column(signal_column::force)[1], 3.1e3);
+  EXPECT_NEAR(signal.column(signal_column::displacement)[1], 12.5e-6, 1e-18);
+  EXPECT_NEAR(signal.column(signal_column::temperature)[0], 20, 1e-9);
+  EXPECT_NEAR(signal.column(signal_column::temperature)[1], 1500, 1e-9);
+  EXPECT_EQ(signal.unit(signal_column::force), "N");
+  EXPECT_EQ(signal.unit(signal_column::temperature), "degC");
+}
+
+TEST_F(SignalCsv, ResistanceMayReplaceVoltage) {
+  const Signal signal = read_signal_csv(
+      write("r.csv", "time [s], current [A], resistance [µΩ]\n0, 1, 150\n0.001, 2, 160.5\n"));
+  EXPECT_FALSE(signal.has_column(signal_column::voltage));
+  EXPECT_NEAR(signal.column(signal_column::resistance)[1], 160.5e-6, 1e-18);
+}
+
+TEST_F(SignalCsv, ErrorsNameFileLineAndColumn) {
+  const std::string bad_number = write("bad_number.csv",
+                                       "time [ms], current [kA]\n0, 0\n0.5, 8..0\n");
+  std::string message = read_error(bad_number);
+  EXPECT_NE(message.find(bad_number + ":3:"), std::string::npos) << message;
+  EXPECT_NE(message.find("column 2 ('current [kA]')"), std::string::npos) << message;
+  EXPECT_NE(message.find("8..0"), std::string::npos) << message;
+
+  message = read_error(write("wrong_kind.csv", "time [ms], current [mm]\n0, 0\n1, 1\n"));
+  EXPECT_NE(message.find(":1: column 2"), std::string::npos) << message;
+  EXPECT_NE(message.find("electric current"), std::string::npos) << message;
+
+  message = read_error(write("no_unit.csv", "time, current [kA]\n0, 0\n1, 1\n"));
+  EXPECT_NE(message.find(":1: column 1 ('time')"), std::string::npos) << message;
+
+  message = read_error(write("unknown_unit.csv", "time [ms], current [kQ]\n0, 0\n1, 1\n"));
+  EXPECT_NE(message.find("unknown unit 'kQ'"), std::string::npos) << message;
+
+  message = read_error(write("short_row.csv", "time [ms], current [kA]\n0, 0\n1\n"));
+  EXPECT_NE(message.find(":3: expected 2"), std::string::npos) << message;
+
+  message = read_error(write("backwards.csv", "time [ms], current [kA]\n0, 0\n1, 1\n1, 2\n"));
+  EXPECT_NE(message.find(":4: column 1 ('time [ms]')"), std::string::npos) << message;
+
+  message = read_error(write("no_time.csv", "current [kA]\n0\n1\n"));
+  EXPECT_NE(message.find("no 'time [unit]' column"), std::string::npos) << message;
+
+  message = read_error((directory_ / "missing.csv").string());
+  EXPECT_NE(message.find("cannot open"), std::string::npos) << message;
+}
+
+TEST_F(SignalCsv, FeaturesFromFileMatchTheInMemorySignal) {
+  // Simulation and experiment go through the same extractor: the synthetic weld written
+  // in engineering units and read back gives the same features.
+  const Signal signal = synthetic_weld(ResistanceShape{});
+  std::ostringstream text;
+  text.precision(17);
+  text << "time [ms], current [kA], voltage [V], displacement [mm], temperature [degC]\n";
+  for (std::size_t i = 0; i < signal.n_samples(); ++i) {
+    const auto k = static_cast<Eigen::Index>(i);
+    text << signal.time()[k] * 1e3 << ", " << signal.column(signal_column::current)[k] * 1e-3 << ", "
+         << signal.column(signal_column::voltage)[k] << ", "
+         << signal.column(signal_column::displacement)[k] * 1e3 << ", "
+         << signal.column(signal_column::temperature)[k] << "\n";
+  }
+  const FeatureValues from_memory = extract_features(signal, half_current_threshold());
+  const FeatureValues from_file =
+      extract_features(read_signal_csv(write("synthetic.csv", text.str())), half_current_threshold());
+  ASSERT_EQ(from_memory.names(), from_file.names());
+  for (std::size_t i = 0; i < from_memory.size(); ++i) {
+    EXPECT_NEAR(from_file.values()[i], from_memory.values()[i],
+                1e-8 * std::abs(from_memory.values()[i]) + 1e-15)
+        << from_memory.names()[i];
+  }
+}
+
+}  // namespace
+}  // namespace rsw::calibration
