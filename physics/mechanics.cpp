@@ -5,6 +5,7 @@
 #include "fem/fe_values.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -79,6 +80,7 @@ struct Mechanics::Impl {
         displacement_solver(s.friction_coefficient > 0 ? fem::SolverKind::umfpack : fem::SolverKind::cholmod),
         n_q(s.n_gauss * s.n_gauss) {
     if (std::getenv("RSW_VERBOSE")) settings.verbose = true;
+    if (s.n_gauss < 1 || s.n_gauss > 3) throw std::invalid_argument("Mechanics: n_gauss must be 1, 2 or 3");
     if (static_cast<int>(body_materials.size()) != mesh.n_bodies())
       throw std::invalid_argument("Mechanics: one material per body expected");
     for (int e = 0; e < mesh.n_cells(); ++e) cell_material.push_back(body_materials[mesh.cell_body[e]]);
@@ -166,27 +168,35 @@ struct Mechanics::Impl {
   }
 
   void cell_kernel(int e, fem::LocalSystem& local) {
-    fem::CellValues fv(settings.n_gauss);
+    // Scratch per thread: the cell kernel runs in parallel over cells of one colour.
+    thread_local std::unique_ptr<fem::CellValues> scratch;
+    if (!scratch || scratch->n_q() != n_q) scratch = std::make_unique<fem::CellValues>(settings.n_gauss);
+    fem::CellValues& fv = *scratch;
     fv.reinit(current, e);
     const auto& c = mesh.cells[e];
-    const double kappa = control == Control::displacement ? foundation[mesh.cell_body[e]] : 0.0;
-    if (kappa > 0)  // seating foundation: body force -κ u_z towards the initial position
-      for (int q = 0; q < fv.n_q(); ++q)
-        for (int a = 0; a < 4; ++a) {
-          double uz = 0;
-          for (int b = 0; b < 4; ++b) uz += fv.N(q, b) * (total[2 * c[b] + 1] + increment[2 * c[b] + 1]);
-          local.vector[2 * a + 1] -= kappa * uz * fv.N(q, a) * fv.JxW(q);
-          for (int b = 0; b < 4; ++b) local.matrix(2 * a + 1, 2 * b + 1) += kappa * fv.N(q, a) * fv.N(q, b) * fv.JxW(q);
-        }
     const materials::Material& mat = *cell_material[e];
     Eigen::Matrix<double, 8, 1> du;
     for (int a = 0; a < 4; ++a) du.segment<2>(2 * a) = increment.segment<2>(2 * c[a]);
+    Eigen::Matrix<double, 8, 8> Ke = Eigen::Matrix<double, 8, 8>::Zero();
+    Eigen::Matrix<double, 8, 1> Fe = Eigen::Matrix<double, 8, 1>::Zero();
+
+    const double kappa = control == Control::displacement ? foundation[mesh.cell_body[e]] : 0.0;
+    if (kappa > 0)  // seating foundation: body force -κ u_z towards the initial position
+      for (int q = 0; q < fv.n_q(); ++q) {
+        double uz = 0;
+        for (int b = 0; b < 4; ++b) uz += fv.N(q, b) * (total[2 * c[b] + 1] + increment[2 * c[b] + 1]);
+        for (int a = 0; a < 4; ++a) {
+          Fe[2 * a + 1] -= kappa * uz * fv.N(q, a) * fv.JxW(q);
+          for (int b = 0; b < 4; ++b) Ke(2 * a + 1, 2 * b + 1) += kappa * fv.N(q, a) * fv.N(q, b) * fv.JxW(q);
+        }
+      }
 
     // Cell average of the volumetric strain operator b = (∂N/∂r + N/r, ∂N/∂z).
+    constexpr int max_q = 9;
+    std::array<Eigen::Matrix<double, 1, 8>, max_q> b;
+    std::array<Matrix48, max_q> B;
     Eigen::Matrix<double, 1, 8> b_mean = Eigen::Matrix<double, 1, 8>::Zero();
     double volume = 0;
-    std::vector<Eigen::Matrix<double, 1, 8>> b(fv.n_q());
-    std::vector<Matrix48> B(fv.n_q());
     for (int q = 0; q < fv.n_q(); ++q) {
       const double r = fv.point(q).x();
       B[q].setZero();
@@ -216,9 +226,12 @@ struct Mechanics::Impl {
       trial_strain[k] = eps;
       trial_state[k] = result.state;
       trial_stress[k] = result.stress;
-      local.matrix += B_bar.transpose() * result.tangent * B_bar * fv.JxW(q);  // ∫ B̄ᵀ D B̄ dV
-      local.vector -= B_bar.transpose() * result.stress * fv.JxW(q);           // -∫ B̄ᵀ σ dV
+      const Matrix48 DB = result.tangent * B_bar;
+      Ke.noalias() += B_bar.transpose() * DB * fv.JxW(q);  // ∫ B̄ᵀ D B̄ dV
+      Fe.noalias() -= B_bar.transpose() * result.stress * fv.JxW(q);  // -∫ B̄ᵀ σ dV
     }
+    local.matrix += Ke;
+    local.vector += Fe;
   }
 
   void group_kernel(int g, fem::LocalSystem& local) {
@@ -511,6 +524,16 @@ double Mechanics::normal_penalty(const std::string& interface) const {
   for (std::size_t p = 0; p < impl_->pairings.size(); ++p)
     if (impl_->pairings[p].name() == interface) return impl_->normal_penalty[p];
   throw std::out_of_range("unknown interface '" + interface + "'");
+}
+
+const std::vector<contact::InterfacePairing>& Mechanics::pairings() const { return impl_->pairings; }
+
+std::vector<double> Mechanics::contact_pressure(int p) const {
+  const Impl& m = *impl_;
+  std::vector<double> out;
+  for (const auto& pt : m.pairings.at(p).points())
+    out.push_back(pt.paired ? penalty_pressure(pt.gap, m.normal_penalty[p], m.settings.contact_smoothing).pressure : 0.0);
+  return out;
 }
 
 void Mechanics::residual_and_tangent(const Eigen::VectorXd& increment, double force,

@@ -136,6 +136,11 @@ class Mechanics {
   std::vector<double> equivalent_plastic_strain() const;
   std::vector<PointStress> point_stresses() const;
   double normal_penalty(const std::string& interface) const;
+  // The contact pairings (one per mesh interface, in mesh.interfaces order), at the
+  // last solved configuration, and the normal pressure at each of their points (Pa).
+  // The electrical and thermal interface laws use the same points.
+  const std::vector<contact::InterfacePairing>& pairings() const;
+  std::vector<double> contact_pressure(int pairing) const;
 
   // Residual and tangent of the reduced system for a given increment (force
   // control), for finite-difference checks of the Jacobian.

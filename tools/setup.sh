@@ -8,6 +8,7 @@ packages=(
   build-essential cmake ninja-build pkg-config git
   libeigen3-dev            # dense/sparse linear algebra
   libsuitesparse-dev       # CHOLMOD, UMFPACK, KLU direct solvers
+  libopenblas0-serial      # optimised BLAS/LAPACK under SuiteSparse (replaces reference BLAS)
   libsundials-dev          # KINSOL / IDA (coupled time stepping)
   libvtk9-dev              # .vtu/.vtm/.pvd output and read-back in tests
   libhdf5-dev hdf5-tools   # results.h5 and h5dump
