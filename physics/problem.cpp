@@ -215,6 +215,36 @@ ConfigSchema build_schema() {
            "(paper eq. 3); prior uniform [35, 200] W/(m*K); default 117.5, the centre of the "
            "prior (the paper's nominal 35 is its lower bound).");
 
+  s.section("solver", "Numerical settings. None depends on the model parameters, so every "
+                     "output stays a smooth function of them (fixed step schedule, fixed "
+                     "tolerances).");
+  s.number("solver.time_step", "s", "ms").default_value("1 ms")
+      .range(Range::closed(1e-6, 1))
+      .doc("Largest time step of the weld stage; every breakpoint of the current and force "
+           "tables and every output time is also a step, so ramps are resolved.");
+  s.integer("solver.squeeze_force_steps").default_value("10")
+      .range(Range::closed(1, 1000))
+      .doc("Force-controlled steps of the squeeze, after seating (see docs/MECHANICS.md).");
+  s.number("solver.seat_step", "m", "um").default_value("1 um")
+      .range(Range::closed(1e-3, 100))
+      .doc("Electrode travel per displacement-controlled seating step at the start of the "
+           "squeeze.");
+  s.number("solver.contact_penalty_factor", "1", "1").default_value("10")
+      .range(Range::closed(0.1, 1e4))
+      .doc("Normal contact penalty eps_N = factor * E / h (E of the stiffer side, h the finest "
+           "interface cell).");
+  s.number("solver.contact_smoothing", "m", "nm").default_value("10 nm")
+      .range(Range::closed(0, 1e4))
+      .doc("Width of the quadratic start of the C1 penalty contact law.");
+  s.number("solver.coupling_tolerance", "degC", "degC").default_value("1e-3 degC")
+      .range(Range::closed(1e-9, 10))
+      .doc("Electro-thermal coupling iterations stop when no nodal temperature changes by "
+           "more than this between iterations.");
+  s.integer("solver.max_coupling_iterations").default_value("30")
+      .range(Range::closed(1, 1000))
+      .doc("Cap on the electro-thermal coupling iterations of one time step; reaching it "
+           "fails the run with the step named.");
+
   s.section("output", "What a run writes.");
   s.string("output.directory").default_value("results")
       .doc("Directory for the run's outputs, relative to the working directory; not empty.");
@@ -420,6 +450,15 @@ Problem make_problem(const Config& config) {
   thermal.air_htc = config.number("thermal.air_htc");
   thermal.ambient_temperature = config.number("thermal.ambient_temperature");
   thermal.melt_conductivity = config.number("thermal.melt_conductivity");
+
+  SolverSettings& solver = problem.solver;
+  solver.time_step = config.number("solver.time_step");
+  solver.squeeze_force_steps = config.integer("solver.squeeze_force_steps");
+  solver.seat_step = config.number("solver.seat_step");
+  solver.contact_penalty_factor = config.number("solver.contact_penalty_factor");
+  solver.contact_smoothing = config.number("solver.contact_smoothing");
+  solver.coupling_tolerance = config.number("solver.coupling_tolerance");
+  solver.max_coupling_iterations = config.integer("solver.max_coupling_iterations");
 
   problem.output.directory = config.text("output.directory");
   if (problem.output.directory.empty()) {

@@ -61,6 +61,16 @@ struct ThermalParameters {
   double melt_conductivity = 0;    // W/(m*K), lambda_m of paper eq. 3
 };
 
+struct SolverSettings {
+  double time_step = 0;               // s, largest step of the weld stage
+  int squeeze_force_steps = 0;        // force-controlled squeeze steps
+  double seat_step = 0;               // m, seating travel per step
+  double contact_penalty_factor = 0;  // -, eps_N = factor * E / h
+  double contact_smoothing = 0;       // m, delta of the C1 penalty law
+  double coupling_tolerance = 0;      // K, electro-thermal fixed-point tolerance
+  int max_coupling_iterations = 0;
+};
+
 struct OutputSettings {
   std::string directory;
   double interval = 0;  // s, between output steps
@@ -74,6 +84,7 @@ struct Problem {
   Schedule schedule;
   ContactParameters contact;
   ThermalParameters thermal;
+  SolverSettings solver;
   OutputSettings output;
   std::string resolved_config;  // every key in display units (YAML), for echoing
 };

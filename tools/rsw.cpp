@@ -1,4 +1,5 @@
 // The rsw command-line program: one binary with subcommands.
+//   rsw simulate CASE [-o DIR] [--set key=value ...]   run a weld case
 //   rsw mesh CASE [-o DIR] [--set key=value ...]   build and write the meshes
 //   rsw config schema [--format markdown|json]     every config key, documented
 //   rsw config show CASE [--set key=value ...]     the resolved case
@@ -7,10 +8,14 @@
 #include "fem/config.hpp"
 #include "tools/config_commands.hpp"
 #include "tools/mesh_command.hpp"
+#include "tools/simulate_command.hpp"
 
 #include <CLI/CLI.hpp>
 
+#include <omp.h>
+
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 
 #ifndef RSW_VERSION
@@ -21,7 +26,20 @@ int main(int argc, char** argv) {
   CLI::App app{"rsw: resistance spot welding simulation and calibration"};
   app.set_version_flag("--version", std::string("rsw ") + RSW_VERSION);
   app.require_subcommand(1);
+  // One simulation uses one core by default: studies run one process per core, and
+  // OpenMP threads that spin while other processes hold the cores slow a run down
+  // several times. --threads (or OMP_NUM_THREADS) enables the parallel assembly.
+  int threads = 0;
+  app.add_option("--threads", threads, "OpenMP threads for one run (default 1, or OMP_NUM_THREADS)")
+      ->check(CLI::Range(1, 1024));
+  app.parse_complete_callback([&threads]() {
+    if (threads > 0)
+      omp_set_num_threads(threads);
+    else if (!std::getenv("OMP_NUM_THREADS"))
+      omp_set_num_threads(1);
+  });
   rsw::tools::add_mesh_command(app);
+  rsw::tools::add_simulate_command(app);
   add_config_commands(app);
   try {
     app.parse(argc, argv);

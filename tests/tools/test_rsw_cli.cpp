@@ -1,6 +1,7 @@
 // The rsw program as a user runs it: `rsw mesh` writes files that VTK reads back and
 // reports the weld-zone element size; bad input exits non-zero with a message naming
 // the key and what is allowed, and writes nothing.
+#include "fem/hdf5_file.hpp"
 #include "fem/vtk_output.hpp"
 
 #include <gtest/gtest.h>
@@ -85,4 +86,44 @@ TEST(RswConfig, SchemaCommandDocumentsListItemKeys) {
   const CommandResult r = run_rsw("config schema --format markdown");
   ASSERT_EQ(r.status, 0);
   EXPECT_NE(r.output.find("stack.sheets[].thickness"), std::string::npos);
+}
+
+namespace {
+const std::string squeeze_case = std::string(RSW_SOURCE_DIR) + "/validation/squeeze_only/weld.yaml";
+const std::string coarse = " --set mesh.base_size=0.5mm --set mesh.weld_zone.levels=1";
+}  // namespace
+
+TEST(RswSimulate, SqueezeRunWritesReadableResultsAndFields) {
+  const fs::path dir = fresh_dir("squeeze");
+  const CommandResult r = run_rsw("simulate " + squeeze_case + " -q -o " + dir.string() + coarse);
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("es_upper  contact radius"), std::string::npos) << r.output;
+  rsw::fem::Hdf5File h5(dir / "results.h5", rsw::fem::Hdf5Mode::read);
+  const auto time = h5.read_doubles("/signals/time");
+  const auto force = h5.read_doubles("/signals/force");
+  ASSERT_EQ(time.size(), 3u);  // 0, 5 and 10 ms
+  EXPECT_DOUBLE_EQ(time.back(), 0.01);
+  EXPECT_NEAR(force.back(), 3000.0, 1e-6);
+  EXPECT_NE(h5.read_string("/run/config").find("squeeze_only"), std::string::npos);
+  const auto steps = rsw::fem::read_pvd(dir / "fields.pvd");
+  ASSERT_EQ(steps.size(), 3u);
+  const auto last = rsw::fem::read_vtm(steps.back().file);
+  EXPECT_GT(last.block("sheet_1").point_array("displacement").n_tuples(), 0);
+  EXPECT_GT(last.block("sheet_1").cell_array("von_mises_stress").n_tuples(), 0);
+  EXPECT_TRUE(fs::exists(dir / "summary.json"));
+  EXPECT_TRUE(fs::exists(dir / "signals.csv"));
+  EXPECT_FALSE(fs::exists(dir.string() + ".partial"));
+  fs::remove_all(dir);
+}
+
+TEST(RswSimulate, FailedRunLeavesOnlyPartialFolderWithReason) {
+  const fs::path dir = fresh_dir("fail");
+  // Seating steps of 1 nm cannot reach 5 % of the force within the step cap.
+  const CommandResult r = run_rsw("simulate " + squeeze_case + " -q -o " + dir.string() + coarse +
+                                  " --set solver.seat_step=0.001um");
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("seating"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir));
+  EXPECT_TRUE(fs::exists(dir.string() + ".partial/failure.txt"));
+  fs::remove_all(dir.string() + ".partial");
 }

@@ -1,0 +1,72 @@
+// The weld process driver: one run of a weld case from the squeeze to the end of
+// the schedule, with its outputs.
+//
+// Stages:
+//  1. Squeeze (physics/squeeze): seat the stack under displacement control, then
+//     raise the electrode force to F(0) in `solver.squeeze_force_steps` steps.
+//  2. Weld stage, t = 0 ... end of current + cool time, on a fixed step schedule:
+//     every breakpoint of the current and force tables and every output time is a
+//     step boundary, and no step is longer than `solver.time_step`. The schedule
+//     depends on the case's tables and settings only, never on model parameters.
+//     Each step solves the mechanics at the step's force and temperature.
+//
+// Outputs, written into `<dir>.partial/` and moved to `<dir>/` only when the run has
+// finished (a failed run leaves `<dir>.partial/` with `failure.txt` and never a
+// complete-looking `<dir>/`):
+//   results.h5    signals, squeeze history, contact pressure profiles at output times,
+//                 the resolved config, version, timing (h5py / h5dump readable)
+//   signals.csv   the signals, one row per output time, units in the header
+//   fields.pvd    ParaView time series of fields_NNNN.vtm (displacement, temperature,
+//                 von Mises stress, equivalent plastic strain, contact pressure/gap)
+//   summary.json  status, resolved config, version, timing, iteration counts and the
+//                 key results
+#pragma once
+
+#include "physics/problem.hpp"
+
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace rsw::physics {
+
+// Step boundaries of the weld stage (s), from 0 to the end time.
+std::vector<double> weld_step_times(const Problem& problem);
+
+struct Signals {
+  std::vector<std::string> names;
+  std::vector<std::string> units;
+  std::vector<std::vector<double>> columns;
+  int column(const std::string& name) const;  // -1 if absent
+  std::size_t n_rows() const { return columns.empty() ? 0 : columns.front().size(); }
+};
+
+struct RunResult {
+  bool success = false;
+  std::string message;              // failure reason, naming the stage and step
+  std::filesystem::path output_dir;
+  Signals signals;
+  double wall_time = 0;             // s
+  int n_steps = 0;
+  int n_newton_iterations = 0;
+  // Key results at the end of the squeeze.
+  double squeeze_displacement = 0;  // m, upper end face travel (negative: down)
+  std::vector<std::pair<std::string, double>> squeeze_contact_radius;  // per interface, m
+  std::vector<std::pair<std::string, double>> squeeze_peak_pressure;   // per interface, Pa
+  double squeeze_indentation = 0;   // m, sheet_1 top on the axis relative to r = cap radius
+};
+
+struct Progress {
+  std::string stage;  // "squeeze", "weld"
+  int step = 0, n_steps = 0;
+  double time = 0;    // s, weld-stage time
+};
+
+// Runs the case and writes its outputs (see above). Never throws for a failing
+// simulation: the failure is in RunResult::message and in failure.txt. Bad input
+// (unknown material, unwritable directory) throws.
+RunResult run_weld(const Problem& problem, const std::filesystem::path& output_dir,
+                   const std::function<void(const Progress&)>& progress = {});
+
+}  // namespace rsw::physics
