@@ -87,10 +87,38 @@ std::string format_seconds(double s) {
 
 }  // namespace
 
+namespace {
+// Accumulates wall time per named part.
+class Stopwatch {
+ public:
+  explicit Stopwatch(std::vector<std::pair<std::string, double>>& timing) : timing_(timing) {}
+  void start(const std::string& part) {
+    stop();
+    part_ = part;
+    t0_ = std::chrono::steady_clock::now();
+  }
+  void stop() {
+    if (part_.empty()) return;
+    const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
+    auto it = std::find_if(timing_.begin(), timing_.end(), [&](const auto& p) { return p.first == part_; });
+    if (it == timing_.end()) timing_.emplace_back(part_, dt);
+    else it->second += dt;
+    part_.clear();
+  }
+
+ private:
+  std::vector<std::pair<std::string, double>>& timing_;
+  std::string part_;
+  std::chrono::steady_clock::time_point t0_;
+};
+}  // namespace
+
 RunResult run_weld(const Problem& problem, const fs::path& output_dir,
                    const std::function<void(const Progress&)>& progress) {
   const auto t_start = std::chrono::steady_clock::now();
   RunResult result;
+  Stopwatch clock(result.timing);
+  clock.start("setup");
   result.output_dir = output_dir;
   const fs::path partial = output_dir.string() + ".partial";
 
@@ -137,6 +165,7 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
 
   // 1. Squeeze.
   if (progress) progress({"squeeze", 0, 0, 0.0});
+  clock.start("squeeze");
   SqueezeSettings ss;
   ss.seat_step = problem.solver.seat_step;
   ss.n_force_steps = problem.solver.squeeze_force_steps;
@@ -215,6 +244,7 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
     const double interval = problem.output.interval;
     return std::abs(t - next_output * interval) < 1e-9 || t >= times.back() - 1e-12;
   };
+  clock.start("output");
   if (is_output(0.0)) {
     record(0.0);
     ++next_output;
@@ -222,6 +252,7 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
   for (std::size_t k = 1; k < times.size(); ++k) {
     const double t = times[k];
     if (progress) progress({"weld", static_cast<int>(k), result.n_steps, t});
+    clock.start("mechanics");
     const auto report = mech.solve_force_step(problem.schedule.force.at(t), T);
     result.n_newton_iterations += report.iterations;
     if (!report.converged)
@@ -229,13 +260,13 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
                   " ms), mechanics: " + report.message);
     mech.commit();
     if (is_output(t)) {
+      clock.start("output");
       record(t);
       while (next_output * problem.output.interval <= t + 1e-9) ++next_output;
     }
   }
-  result.wall_time = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
-
   // Outputs.
+  clock.start("output");
   {
     fem::Hdf5File h5(partial / "results.h5", fem::Hdf5Mode::truncate);
     for (std::size_t c = 0; c < sig.names.size(); ++c) {
@@ -271,7 +302,7 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
     h5.write_string("/run/config", problem.resolved_config);
     h5.set_attribute("/run", "version", std::string(RSW_VERSION));
     h5.set_attribute("/run", "case", problem.name);
-    h5.set_attribute("/run", "wall_time", result.wall_time);
+    h5.set_attribute("/run", "wall_time", std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count());
     h5.set_attribute("/run", "squeeze_indentation", result.squeeze_indentation);
   }
   {
@@ -285,9 +316,12 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
       csv << "\n";
     }
   }
+  clock.stop();
+  result.wall_time = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   {
     nlohmann::json j;
     j["status"] = "success";
+    for (const auto& [part, seconds] : result.timing) j["timing_s"][part] = seconds;
     j["version"] = RSW_VERSION;
     j["case"] = problem.name;
     j["wall_time_s"] = result.wall_time;

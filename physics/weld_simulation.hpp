@@ -48,6 +48,8 @@ struct RunResult {
   std::filesystem::path output_dir;
   Signals signals;
   double wall_time = 0;             // s
+  // Wall time per part of the run (s): "setup", "squeeze", "mechanics", "output".
+  std::vector<std::pair<std::string, double>> timing;
   int n_steps = 0;
   int n_newton_iterations = 0;
   // Key results at the end of the squeeze.

@@ -38,6 +38,9 @@ void run_simulate(const SimulateOptions& options) {
     throw std::runtime_error("simulation failed: " + result.message + " (see " + dir + ".partial/failure.txt)");
   std::printf("%s: done in %.1f s (%d weld steps, %d Newton iterations)\n", problem.name.c_str(), result.wall_time,
               result.n_steps, result.n_newton_iterations);
+  std::printf("time:");
+  for (const auto& [part, seconds] : result.timing) std::printf(" %s %.2f s,", part.c_str(), seconds);
+  std::printf(" total %.2f s\n", result.wall_time);
   std::printf("after the squeeze: electrode travel %.2f um, indentation %.2f um\n",
               result.squeeze_displacement * 1e6, result.squeeze_indentation * 1e6);
   for (std::size_t i = 0; i < result.squeeze_contact_radius.size(); ++i)
