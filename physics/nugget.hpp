@@ -1,0 +1,40 @@
+// Nugget geometry measured on the interpolated peak-temperature field (MODEL.md §8).
+//
+// The nugget at an isotherm is the part of the sheets where the peak temperature
+// reached so far is at or above the isotherm temperature of the sheet's material
+// (liquidus or solidus). The field is the finite-element interpolant of the nodal
+// peak temperatures, so the measured sizes move continuously with the parameters
+// — never by counting elements. Sizes come from the points where the isotherm
+// crosses cell edges (linear along each edge) and from the nodes inside the region:
+// on a bilinear cell the largest radius and the z-extremes of a super-level set lie
+// on the cell boundary, so these points are enough.
+//   diameter   2 · max r over the region                 (d_n, m)
+//   height     max z − min z over the region             (h_n, m)
+//   penetration into sheet k: the region's z-extent inside sheet k / thickness of k
+//   t_unmolt   the smaller distance, on the axis, from the region to the outer
+//              surfaces of the top and bottom sheets (m)
+// Positions are those of the deformed configuration passed in.
+#pragma once
+
+#include "fem/mesh.hpp"
+
+#include <string>
+#include <vector>
+
+namespace rsw::physics {
+
+struct NuggetSize {
+  double diameter = 0;             // m
+  double height = 0;               // m
+  std::vector<double> penetration; // per sheet, fraction of its thickness
+  double unmolten_thickness = 0;   // m, t_unmolt (sheet stack thickness if no nugget)
+  bool empty = true;
+};
+
+// `sheet_bodies`: body indices of the sheets, top to bottom. `isotherm[b]`: the
+// isotherm temperature (°C) of body b (ignored for non-sheet bodies). `peak` is nodal.
+NuggetSize measure_nugget(const fem::Mesh& mesh, const std::vector<fem::Point>& positions,
+                          const std::vector<double>& peak, const std::vector<int>& sheet_bodies,
+                          const std::vector<double>& isotherm);
+
+}  // namespace rsw::physics
