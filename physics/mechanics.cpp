@@ -339,16 +339,21 @@ struct Mechanics::Impl {
       }
       const Eigen::VectorXd step = cons.distribute(dy, /*homogeneous=*/true);
       const Eigen::VectorXd base = increment;
-      // Backtracking on the Euclidean residual norm.
+      // Backtracking on the Euclidean residual norm. The full step is evaluated with
+      // its tangent (it is accepted almost always); shorter steps first without.
       double alpha = 1.0;
       const double norm2 = R.norm();
-      for (int ls = 0; ls < 8; ++ls) {
-        increment = base + alpha * step;
-        evaluate(ctrl, K, R, false);
-        if (R.norm() <= (1 - 1e-4 * alpha) * norm2 || ls == 7) break;
-        alpha *= 0.5;
-      }
+      increment = base + step;
       evaluate(ctrl, K, R, true);
+      if (R.norm() > (1 - 1e-4) * norm2) {
+        for (int ls = 1; ls < 8; ++ls) {
+          alpha *= 0.5;
+          increment = base + alpha * step;
+          evaluate(ctrl, K, R, false);
+          if (R.norm() <= (1 - 1e-4 * alpha) * norm2) break;
+        }
+        evaluate(ctrl, K, R, true);
+      }
       norm = R.lpNorm<Eigen::Infinity>();
       const double correction = (alpha * step).lpNorm<Eigen::Infinity>();
       if (settings.verbose)
