@@ -69,7 +69,10 @@ InterfacePairing::InterfacePairing(const fem::Mesh& mesh, const std::string& nam
       p.slave_weights = {0.5 * (1 - rule.points[q]), 0.5 * (1 + rule.points[q])};
     }
   update(mesh.nodes);
-  for (auto& p : points_) p.reference_position = p.position;
+  for (auto& p : points_) {
+    p.reference_position = p.position;
+    p.reference_area = p.area;
+  }
 }
 
 int InterfacePairing::local_index(int slave_face, int node) const {
@@ -81,6 +84,12 @@ int InterfacePairing::local_index(int slave_face, int node) const {
 bool InterfacePairing::update(const std::vector<fem::Point>& x) {
   const auto rule = fem::gauss_legendre(n_gauss_);
   bool within = true;
+  std::vector<Eigen::Vector2d> nodal_normals(master_nodes_.size(), Eigen::Vector2d::Zero());
+  for (std::size_t k = 0; k < master_nodes_.size(); ++k) {
+    for (int f : master_faces_of_node_[k])
+      nodal_normals[k] += outward_normal(x[master_faces_[f][0]], x[master_faces_[f][1]]);
+    nodal_normals[k].normalize();
+  }
   for (auto& p : points_) {
     const fem::Point& a = x[p.slave_nodes[0]];
     const fem::Point& b = x[p.slave_nodes[1]];
@@ -111,24 +120,37 @@ bool InterfacePairing::update(const std::vector<fem::Point>& x) {
     p.master_face = -1;
     if (best_face < 0) continue;
     const auto& mf = master_faces_[best_face];
-    // Clamped to a node: the free end of the master surface means no partner.
-    Eigen::Vector2d normal = outward_normal(x[mf[0]], x[mf[1]]);
+    auto node_normal = [&](int node) {
+      const auto pos = std::lower_bound(master_nodes_.begin(), master_nodes_.end(), node) - master_nodes_.begin();
+      return nodal_normals[pos];
+    };
+    double eta = best_eta;
     if (best_eta_raw < 0 || best_eta_raw > 1) {
+      // Beyond a free end of the master surface: follow the end face's line for half
+      // a face length (so that a point sliding off the end loses contact gradually,
+      // not at a jump), unpaired further out.
       const int node = mf[best_eta_raw < 0 ? 0 : 1];
       const auto pos = std::lower_bound(master_nodes_.begin(), master_nodes_.end(), node) - master_nodes_.begin();
-      const auto& faces = master_faces_of_node_[pos];
-      if (faces.size() < 2) continue;
-      normal.setZero();
-      for (int f : faces) normal += outward_normal(x[master_faces_[f][0]], x[master_faces_[f][1]]);
-      normal.normalize();
+      if (master_faces_of_node_[pos].size() < 2) {
+        if (best_eta_raw < -0.5 || best_eta_raw > 1.5) continue;
+        eta = best_eta_raw;
+      }
     }
+    // Smoothed normal: the nodal normals (mean of the adjacent face normals)
+    // interpolated along the face, so that the gap does not jump when a point
+    // crosses a master node.
+    // Face normal inside the face (perpendicular to it, so the gap does not change
+    // when the point slides along the face); the nodal normal when the closest
+    // point is a node between two faces (convex corner).
+    Eigen::Vector2d normal = outward_normal(x[mf[0]], x[mf[1]]);
+    if (best_eta <= 0.0 || best_eta >= 1.0) normal = node_normal(mf[best_eta <= 0.0 ? 0 : 1]);
     p.paired = true;
     p.master_face = best_face;
     p.master_nodes = mf;
-    p.master_weights = {1 - best_eta, best_eta};
+    p.master_weights = {1 - eta, eta};
     p.normal = normal;
     p.tangent = Eigen::Vector2d(normal.y(), -normal.x());
-    const fem::Point xm = (1 - best_eta) * x[mf[0]] + best_eta * x[mf[1]];
+    const fem::Point xm = (1 - eta) * x[mf[0]] + eta * x[mf[1]];
     p.gap = (p.position - xm).dot(normal);
     const auto& cand = candidates_[p.slave_face];
     if (std::find(cand.begin(), cand.end(), best_face) == cand.end()) within = false;

@@ -8,11 +8,14 @@
 // Geometry, current configuration x = X + u:
 //   x_s = Σ_a N_a(ξ_q) x_a over the two slave face nodes (ξ_q a Gauss point),
 //   x_m = (1 - η) x_1 + η x_2 the closest point on a master face (η ∈ [0, 1]),
-//   n   = outward unit normal of the master face (pointing to the slave side),
+//   n   = the outward normal of the master face (perpendicular to it, so the gap's
+//         derivative along the face vanishes and the contact tangent is exact);
+//         where the closest point is a node between two faces, the nodal normal (the
+//         normalised mean of the two face normals),
 //   g   = (x_s - x_m) · n   (> 0 open, < 0 penetrating), t = n rotated by -90°.
-// At a master node between two faces (convex corner) the normal is the mean of the
-// two face normals. A slave point whose closest master point is the free end of the
-// master surface, beyond it, is unpaired (no contact there).
+// Beyond a free end of the master surface the end face's line is followed for half
+// a face length (x_m extrapolated), so a point sliding off the end loses contact
+// gradually; further out the point is unpaired.
 // Area weight: w_q |x_2 - x_1|/2 · 2π r_q of the slave face in the current
 // configuration (the axisymmetric measure, as in fem::FaceValues).
 //
@@ -37,6 +40,7 @@ struct ContactPoint {
   std::array<int, 2> slave_nodes{};    // mesh nodes
   std::array<double, 2> slave_weights{};
   double area = 0;                     // m^2, the point's share of the slave surface
+  double reference_area = 0;           // m^2, the same in the undeformed mesh
   fem::Point position;                 // current slave point, m
   fem::Point reference_position;       // the same point in the undeformed mesh, m
   bool paired = false;

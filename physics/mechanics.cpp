@@ -54,6 +54,16 @@ struct Mechanics::Impl {
   std::vector<materials::J2State> state, trial_state;
   std::vector<Vector4> trial_stress;
   std::vector<std::vector<double>> tau, trial_tau;  // per pairing, per point
+  // A bonded point is tied to a fixed material point of the master face: the
+  // traction follows the change of the relative position vector d = x_s - x_m,
+  // t = ε_N (d_b - d), exact and linear in the displacements.
+  struct Tie {
+    bool on = false;
+    std::array<int, 2> master_nodes{};
+    std::array<double, 2> master_weights{};
+    Eigen::Vector2d reference = Eigen::Vector2d::Zero();  // d_b
+  };
+  std::vector<std::vector<Tie>> ties;  // per pairing, per point
 
   Eigen::VectorXd increment;    // Δu of the current step (full)
   Eigen::VectorXd last_increment;  // Δu of the last committed step, for the predictor
@@ -65,6 +75,7 @@ struct Mechanics::Impl {
   Control control = Control::force;
   double force = 0;             // applied (force control)
   bool pairing_within = true;
+  bool skip_cells = false, skip_groups = false;  // diagnose() only
 
   Impl(const fem::Mesh& m, std::vector<const materials::Material*> body_materials, const MechanicsSettings& s,
        double T0)
@@ -144,6 +155,7 @@ struct Mechanics::Impl {
         dof_groups.push_back(std::move(g));
       }
       tau.emplace_back(pairing.points().size(), 0.0);
+      ties.emplace_back(pairing.points().size());
     }
     trial_tau = tau;
     force_assembler = std::make_unique<fem::Assembler>(mesh, dofs, force_constraints, dof_groups);
@@ -248,6 +260,33 @@ struct Mechanics::Impl {
       const int idx = f * pairing.n_gauss() + k;
       const auto& pt = pairing.points()[idx];
       trial_tau[p][idx] = 0.0;
+      const Tie& tie = ties[p][idx];
+      if (tie.on) {
+        Eigen::Matrix<double, 2, Eigen::Dynamic> B = Eigen::Matrix<double, 2, Eigen::Dynamic>::Zero(2, n_local);
+        Eigen::Vector2d d = pt.position;
+        bool complete = true;
+        for (int s2 = 0; s2 < 2; ++s2) {
+          const int ls = pairing.local_index(f, pt.slave_nodes[s2]);
+          const int lm = pairing.local_index(f, tie.master_nodes[s2]);
+          if (ls < 0 || lm < 0) {
+            complete = false;
+            break;
+          }
+          B.block<2, 2>(0, 2 * ls) += pt.slave_weights[s2] * Eigen::Matrix2d::Identity();
+          B.block<2, 2>(0, 2 * lm) -= tie.master_weights[s2] * Eigen::Matrix2d::Identity();
+          d -= tie.master_weights[s2] * (current.nodes[tie.master_nodes[s2]] +
+                                         Eigen::Vector2d(increment[2 * tie.master_nodes[s2]],
+                                                         increment[2 * tie.master_nodes[s2] + 1]));
+        }
+        if (!complete) {
+          pairing_within = false;
+          continue;
+        }
+        const Eigen::Vector2d traction = eps_n * (tie.reference - d);  // on the slave side
+        local.vector += pt.reference_area * B.transpose() * traction;
+        local.matrix += eps_n * pt.reference_area * B.transpose() * B;
+        continue;
+      }
       if (!pt.paired || pt.gap >= 0) continue;
       Nv.setZero();
       Tv.setZero();
@@ -268,7 +307,9 @@ struct Mechanics::Impl {
         pairing_within = false;
         continue;
       }
-      const double A = pt.area;
+      // Tractions act on the undeformed area: the surface stretch is small, and the
+      // tangent is then exact (no area derivative to linearise).
+      const double A = pt.reference_area;
       const auto [pressure, k_n] = penalty_pressure(pt.gap, eps_n, settings.contact_smoothing);
       local.vector += pressure * A * Nv;                     // contact force on both sides
       local.matrix += k_n * A * Nv * Nv.transpose();         // -∂f/∂u
@@ -297,8 +338,8 @@ struct Mechanics::Impl {
       if (!pairing.update(x)) pairing_within = false;
     const fem::Assembler& assembler = ctrl == Control::force ? *force_assembler : *displacement_assembler;
     fem::Assembler::Terms terms;
-    terms.cells = [this](int e, fem::LocalSystem& l) { cell_kernel(e, l); };
-    terms.groups = [this](int g, fem::LocalSystem& l) { group_kernel(g, l); };
+    if (!skip_cells) terms.cells = [this](int e, fem::LocalSystem& l) { cell_kernel(e, l); };
+    if (!skip_groups) terms.groups = [this](int g, fem::LocalSystem& l) { group_kernel(g, l); };
     for (const auto& [boundary, pressure] : settings.pressure_loads) {
       const double p = pressure;
       terms.faces.push_back({&mesh.boundary(boundary), [this, p](const fem::BoundaryFace& f, fem::LocalSystem& l) {
@@ -315,6 +356,50 @@ struct Mechanics::Impl {
       f_ext[w_dof] = -force;  // the electrode presses down on the stack
       R += force_constraints.condense(f_ext);
     }
+  }
+
+  // Debug aid (RSW_VERBOSE): compares the tangent with a finite difference of the
+  // residual along the Newton direction and names the node with the worst mismatch.
+  void diagnose(Control ctrl, const Eigen::VectorXd& base, const Eigen::VectorXd& step, fem::SparseMatrix& K) {
+    fem::Constraints& cons = ctrl == Control::force ? force_constraints : displacement_constraints;
+    fem::SparseMatrix K0;
+    Eigen::VectorXd R0, R1, dummy;
+    increment = base;
+    evaluate(ctrl, K0, R0, true);
+    const double h = 1e-6;
+    increment = base + h * step;
+    fem::SparseMatrix K1;
+    evaluate(ctrl, K1, R1, false);
+    const Eigen::VectorXd y = cons.restrict_to_free(step);
+    const Eigen::VectorXd fd = -(R1 - R0) / h, lin = K0 * y;
+    Eigen::Index worst;
+    (fd - lin).cwiseAbs().maxCoeff(&worst);
+    int dof = -1;
+    for (int d = 0; d < dofs.n_dofs(); ++d)
+      if (cons.free_index(d) == worst) dof = d;
+    const int node = dof / 2;
+    for (int part = 0; part < 2; ++part) {
+      skip_cells = part == 1;
+      skip_groups = part == 0;
+      fem::SparseMatrix Ka, Kb;
+      Eigen::VectorXd Ra, Rb;
+      increment = base;
+      evaluate(ctrl, Ka, Ra, true);
+      increment = base + h * step;
+      evaluate(ctrl, Kb, Rb, false);
+      const Eigen::VectorXd f = -(Ra - Rb) / h * -1.0, l = Ka * y;
+      std::fprintf(stderr, "    %s only: |fd - K d| / |K d| = %.3e\n", part == 0 ? "cells" : "contact",
+                   (-(Rb - Ra) / h - l).norm() / std::max(l.norm(), 1e-300));
+      (void)f;
+    }
+    skip_cells = skip_groups = false;
+    std::fprintf(stderr, "  tangent check: |fd - K d| / |K d| = %.3e; worst at dof %d (node %d, body %s, r = %.4f mm, "
+                 "z = %.4f mm, T = %.0f): fd %.4e, K d %.4e\n",
+                 (fd - lin).norm() / lin.norm(), dof, node,
+                 node < mesh.n_nodes() ? mesh.body_names[mesh.node_body[node]].c_str() : "extra",
+                 node < mesh.n_nodes() ? mesh.nodes[node].x() * 1e3 : 0.0,
+                 node < mesh.n_nodes() ? mesh.nodes[node].y() * 1e3 : 0.0,
+                 node < mesh.n_nodes() ? temperature[node] : 0.0, fd[worst], lin[worst]);
   }
 
   MechanicsStepReport newton(Control ctrl, double load_scale) {
@@ -353,6 +438,11 @@ struct Mechanics::Impl {
           if (R.norm() <= (1 - 1e-4 * alpha) * norm2) break;
         }
         evaluate(ctrl, K, R, true);
+        if (settings.verbose && alpha < 0.01) {
+          diagnose(ctrl, base, step, K);
+          increment = base + alpha * step;
+          evaluate(ctrl, K, R, true);
+        }
       }
       norm = R.lpNorm<Eigen::Infinity>();
       const double correction = (alpha * step).lpNorm<Eigen::Infinity>();
@@ -475,7 +565,7 @@ std::vector<InterfaceState> Mechanics::interface_states() const {
       s.pressure.push_back(pressure);
       s.gap.push_back(pt.paired ? pt.gap : std::nan(""));
       s.shear.push_back(m.tau[p][i]);
-      s.normal_force += pressure * pt.area;
+      s.normal_force += pressure * pt.reference_area;
     }
     // Outermost zero crossing of the gap, interpolated between points.
     for (std::size_t i = 0; i + 1 < s.gap.size(); ++i) {
@@ -533,11 +623,39 @@ double Mechanics::normal_penalty(const std::string& interface) const {
 
 const std::vector<contact::InterfacePairing>& Mechanics::pairings() const { return impl_->pairings; }
 
+void Mechanics::set_bonded(const std::vector<std::vector<char>>& bonded) {
+  Impl& m = *impl_;
+  for (std::size_t p = 0; p < m.pairings.size() && p < bonded.size(); ++p)
+    for (std::size_t i = 0; i < m.pairings[p].points().size() && i < bonded[p].size(); ++i) {
+      auto& tie = m.ties[p][i];
+      const auto& pt = m.pairings[p].points()[i];
+      if (!bonded[p][i] || tie.on || !pt.paired) continue;
+      // Bond in the state reached, keeping the contact traction p n of that moment.
+      tie.on = true;
+      tie.master_nodes = pt.master_nodes;
+      tie.master_weights = pt.master_weights;
+      const Eigen::Vector2d x_m = pt.master_weights[0] * m.current.nodes[pt.master_nodes[0]] +
+                                  pt.master_weights[1] * m.current.nodes[pt.master_nodes[1]];
+      const double pressure = penalty_pressure(pt.gap, m.normal_penalty[p], m.settings.contact_smoothing).pressure;
+      tie.reference = (pt.position - x_m) + pressure / m.normal_penalty[p] * pt.normal;
+    }
+}
+
 std::vector<double> Mechanics::contact_pressure(int p) const {
   const Impl& m = *impl_;
   std::vector<double> out;
-  for (const auto& pt : m.pairings.at(p).points())
-    out.push_back(pt.paired ? penalty_pressure(pt.gap, m.normal_penalty[p], m.settings.contact_smoothing).pressure : 0.0);
+  const auto& points = m.pairings.at(p).points();
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const auto& pt = points[i];
+    const auto& tie = m.ties[p][i];
+    if (tie.on) {  // normal component of the tie traction, compressive part
+      const Eigen::Vector2d x_m = tie.master_weights[0] * m.current.nodes[tie.master_nodes[0]] +
+                                  tie.master_weights[1] * m.current.nodes[tie.master_nodes[1]];
+      out.push_back(std::max(0.0, m.normal_penalty[p] * (tie.reference - (pt.position - x_m)).dot(pt.normal)));
+    } else {
+      out.push_back(pt.paired ? penalty_pressure(pt.gap, m.normal_penalty[p], m.settings.contact_smoothing).pressure : 0.0);
+    }
+  }
   return out;
 }
 

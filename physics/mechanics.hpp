@@ -38,7 +38,8 @@
 // trial traction τ_trial = τ_n + ε_T Δs (Δs the tangential slip increment of the
 // slave point relative to the master, τ_n the committed history): stick with
 // stiffness ε_T at small traction, sliding as |τ| → μ p, and no switch between the
-// two, so the tangent stays continuous.
+// two, so the tangent stays continuous. Points where the sheets have fused (set_bonded)
+// are tied instead.
 #pragma once
 
 #include "contact/interface_pairing.hpp"
@@ -122,6 +123,12 @@ class Mechanics {
   MechanicsStepReport solve_displacement_step(double w, const Eigen::VectorXd& nodal_temperature);
   // Accepts the last converged step: history, geometry and totals move forward.
   void commit();
+  // Points of sheet/sheet interfaces bonded by melting (flags per pairing point, in
+  // pairing order). A bonded point is tied: its normal traction follows the gap
+  // change since bonding linearly in tension and compression, p = ε_N (g_b - g), and
+  // its tangential traction the slip since bonding, τ = ε_T s, with no friction
+  // limit, so the two sheets move as one body there. Takes effect from the next step.
+  void set_bonded(const std::vector<std::vector<char>>& bonded);
 
   // Totals after the last commit.
   const std::vector<fem::Point>& positions() const { return positions_; }

@@ -5,14 +5,21 @@
 #include "fem/vtk_output.hpp"
 #include "materials/material_library.hpp"
 #include "meshes/weld_mesh.hpp"
+#include "physics/electrical.hpp"
 #include "physics/mechanics.hpp"
+#include "physics/nugget.hpp"
 #include "physics/squeeze.hpp"
+#include "physics/thermal.hpp"
+
+#include "fem/fe_values.hpp"
 
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -78,12 +85,34 @@ double indentation(const Problem& problem, const fem::Mesh& mesh, const Eigen::V
   return 0.5 * (d_top + d_bottom);
 }
 
-std::string format_seconds(double s) {
-  std::ostringstream out;
-  out.precision(3);
-  out << s << " s";
-  return out.str();
+// Enthalpy gained by the nugget (sheet cells whose centre reached the liquidus),
+// ∫ ρ_0 (H(T) − H(T_0)) dV, J.
+double nugget_enthalpy(const fem::Mesh& mesh, const std::vector<fem::Point>& positions, const Eigen::VectorXd& T,
+                       const std::vector<double>& peak, const std::vector<int>& sheet_bodies,
+                       const std::vector<double>& liquidus, const std::vector<const materials::Material*>& mats,
+                       double T0) {
+  fem::Mesh current = mesh;
+  current.nodes = positions;
+  fem::CellValues cv(2);
+  double energy = 0;
+  for (int e = 0; e < mesh.n_cells(); ++e) {
+    const int b = mesh.cell_body[e];
+    if (std::find(sheet_bodies.begin(), sheet_bodies.end(), b) == sheet_bodies.end()) continue;
+    const auto& c = mesh.cells[e];
+    const double peak_centre = 0.25 * (peak[c[0]] + peak[c[1]] + peak[c[2]] + peak[c[3]]);
+    if (peak_centre < liquidus[b]) continue;
+    cv.reinit(current, e);
+    const double rho0 = mats[b]->density(20.0).value;
+    const double H0 = mats[b]->enthalpy(T0).value;
+    for (int q = 0; q < cv.n_q(); ++q) {
+      double Tq = 0;
+      for (int a = 0; a < 4; ++a) Tq += cv.N(q, a) * T[c[a]];
+      energy += rho0 * (mats[b]->enthalpy(Tq).value - H0) * cv.JxW(q);
+    }
+  }
+  return energy;
 }
+
 
 }  // namespace
 
@@ -137,14 +166,6 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
   std::vector<const materials::Material*> body_materials;
   for (const auto& m : materials_of_body) body_materials.push_back(&m);
 
-  bool any_current = false;
-  for (double I : problem.schedule.current.value) any_current = any_current || I != 0.0;
-  if (any_current)
-    throw std::runtime_error(
-        "this version of rsw simulates the squeeze and the mechanics of the weld stage only: the "
-        "current table must be zero (set schedule.current to [[0 ms, 0 kA], [<t> ms, 0 kA]]); the "
-        "coupled electro-thermal solve is not available yet");
-
   fs::remove_all(partial);
   fs::create_directories(partial);
 
@@ -180,18 +201,40 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
   result.squeeze_indentation = indentation(problem, mesh, mech.displacement());
   const double w0 = mech.end_face_displacement();
 
-  // 2. Weld stage.
+  // 2. Weld stage: per step, electrical ⇄ thermal fixed-point iterations on the
+  // contact state of the last mechanics solve, then the mechanics at the new
+  // temperature (staggered; the interface laws see the contact pressure one step late).
+  clock.start("setup");
+  const contact::InterfaceModel model = interface_model(mesh, problem.contact);
+  Electrical electrical(mesh, body_materials, model);
+  ThermalSettings th = thermal_settings(problem.thermal);
+  Thermal thermal(mesh, body_materials, model, th);
+  std::vector<int> sheet_bodies;
+  for (const auto& sh : problem.geometry.sheets) sheet_bodies.push_back(mesh.body_index(sh.name));
+  std::vector<double> liquidus(mesh.n_bodies()), solidus(mesh.n_bodies());
+  for (int b = 0; b < mesh.n_bodies(); ++b) {
+    liquidus[b] = body_materials[b]->liquidus();
+    solidus[b] = body_materials[b]->solidus();
+  }
+
   const std::vector<double> times = weld_step_times(problem);
   result.n_steps = static_cast<int>(times.size()) - 1;
   Signals& sig = result.signals;
-  sig.names = {"time", "current", "force", "electrode_displacement"};
-  sig.units = {"s", "A", "N", "m"};
   const auto states0 = mech.interface_states();
-  for (const auto& st : states0) {
-    sig.names.push_back("contact_radius_" + st.name);
-    sig.units.push_back("m");
-    sig.names.push_back("peak_pressure_" + st.name);
-    sig.units.push_back("Pa");
+  std::vector<std::pair<std::string, std::string>> columns = {
+      {"time", "s"}, {"current", "A"}, {"voltage", "V"}, {"resistance", "ohm"}, {"force", "N"},
+      {"displacement", "m"}, {"temperature", "degC"}};
+  for (const auto& sh : problem.geometry.sheets) columns.push_back({"temperature_" + sh.name, "degC"});
+  for (const char* c : {"d_n_liq", "h_n_liq", "d_n_sol", "h_n_sol"}) columns.push_back({c, "m"});
+  for (const auto& st : states0) columns.push_back({"contact_radius_" + st.name, "m"});
+  for (const auto& st : states0) columns.push_back({"joule_power_" + st.name, "W"});
+  for (const auto& c : std::vector<std::pair<std::string, std::string>>{
+           {"joule_power_bulk", "W"}, {"electrical_energy", "J"}, {"stored_energy", "J"},
+           {"removed_energy", "J"}, {"coupling_iterations", "1"}})
+    columns.push_back(c);
+  for (const auto& [n, u] : columns) {
+    sig.names.push_back(n);
+    sig.units.push_back(u);
   }
   sig.columns.assign(sig.names.size(), {});
 
@@ -199,13 +242,44 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
   if (problem.output.fields) series = std::make_unique<fem::VtkTimeSeries>(partial / "fields.pvd");
   std::vector<std::vector<std::vector<double>>> profiles_radius(states0.size()), profiles_pressure(states0.size());
   std::vector<double> output_times;
+  double electrical_energy = 0, stored_energy = 0, removed_energy = 0;
+  double last_voltage = 0, last_current = 0;
+  int last_coupling = 0;
+  std::vector<double> last_interface_power(states0.size(), 0.0);
+  double last_bulk_power = 0;
+  bool have_electrical = false;
 
+  auto peak_vector = [&]() {
+    const Eigen::VectorXd& pk = thermal.peak_temperature();
+    return std::vector<double>(pk.data(), pk.data() + pk.size());
+  };
   auto record = [&](double t) {
     const auto states = mech.interface_states();
-    std::vector<double> row{t, problem.schedule.current.at(t), mech.electrode_force(), mech.end_face_displacement() - w0};
+    const Eigen::VectorXd& T = thermal.committed_temperature();
+    std::vector<double> row{t, last_current, have_electrical ? last_voltage : 0.0,
+                            (have_electrical && std::abs(last_current) > 1.0) ? last_voltage / last_current
+                                                                               : std::nan(""),
+                            mech.electrode_force(), mech.end_face_displacement() - w0};
+    double t_all = -1e300;
+    std::vector<double> t_sheet;
+    for (int b : sheet_bodies) {
+      double m = -1e300;
+      for (int n = 0; n < mesh.n_nodes(); ++n)
+        if (mesh.node_body[n] == b) m = std::max(m, T[n]);
+      t_sheet.push_back(m);
+      t_all = std::max(t_all, m);
+    }
+    row.push_back(t_all);
+    row.insert(row.end(), t_sheet.begin(), t_sheet.end());
+    const auto peak = peak_vector();
+    const auto liq = measure_nugget(mesh, mech.positions(), peak, sheet_bodies, liquidus);
+    const auto sol = measure_nugget(mesh, mech.positions(), peak, sheet_bodies, solidus);
+    row.insert(row.end(), {liq.diameter, liq.height, sol.diameter, sol.height});
+    for (const auto& st : states) row.push_back(st.contact_radius);
+    for (double pw : last_interface_power) row.push_back(pw);
+    row.insert(row.end(), {last_bulk_power, electrical_energy, stored_energy, removed_energy,
+                           static_cast<double>(last_coupling)});
     for (std::size_t i = 0; i < states.size(); ++i) {
-      row.push_back(states[i].contact_radius);
-      row.push_back(*std::max_element(states[i].pressure.begin(), states[i].pressure.end()));
       profiles_radius[i].push_back(states[i].radius);
       profiles_pressure[i].push_back(states[i].pressure);
     }
@@ -216,25 +290,48 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
     const Eigen::VectorXd u = mech.displacement();
     fields.add_point_vector("displacement", std::vector<double>(u.data(), u.data() + u.size()));
     fields.add_point_scalar("temperature", std::vector<double>(T.data(), T.data() + T.size()));
+    fields.add_point_scalar("peak_temperature", peak);
+    const Eigen::VectorXd fl = thermal.liquid_fraction();
+    fields.add_point_scalar("liquid_fraction", std::vector<double>(fl.data(), fl.data() + fl.size()));
+    if (have_electrical) {
+      const Eigen::VectorXd& phi = electrical.solution().potential;
+      fields.add_point_scalar("potential", std::vector<double>(phi.data(), phi.data() + phi.size()));
+      fields.add_cell_scalar("joule_heat", electrical.cell_joule_heat());
+      std::vector<double> j;
+      for (const auto& v : electrical.cell_current_density()) {
+        j.push_back(v.x());
+        j.push_back(v.y());
+      }
+      fields.add_cell_vector("current_density", j);
+    } else {
+      fields.add_point_scalar("potential", std::vector<double>(mesh.n_nodes(), 0.0));
+      fields.add_cell_scalar("joule_heat", std::vector<double>(mesh.n_cells(), 0.0));
+      fields.add_cell_vector("current_density", std::vector<double>(2 * mesh.n_cells(), 0.0));
+    }
     fields.add_cell_scalar("von_mises_stress", mech.von_mises());
     fields.add_cell_scalar("equivalent_plastic_strain", mech.equivalent_plastic_strain());
     const auto& pairings = mech.pairings();
+    const auto& htc = thermal.interface_conductance();
     for (std::size_t p = 0; p < pairings.size(); ++p) {
       const auto pressure = mech.contact_pressure(static_cast<int>(p));
       const int n_g = pairings[p].n_gauss();
-      std::vector<double> face_p(pairings[p].n_slave_faces()), face_g(pairings[p].n_slave_faces());
-      for (int f = 0; f < pairings[p].n_slave_faces(); ++f) {
-        double sp = 0, sg = 0;
+      const int n_f = pairings[p].n_slave_faces();
+      std::vector<double> face_p(n_f, 0.0), face_g(n_f, 0.0), face_he(n_f, 0.0), face_htc(n_f, 0.0);
+      for (int f = 0; f < n_f; ++f)
         for (int k = 0; k < n_g; ++k) {
-          sp += pressure[f * n_g + k] / n_g;
-          const auto& pt = pairings[p].points()[f * n_g + k];
-          sg += (pt.paired ? pt.gap : std::nan("")) / n_g;
+          const int i = f * n_g + k;
+          const auto& pt = pairings[p].points()[i];
+          face_p[f] += pressure[i] / n_g;
+          face_g[f] += (pt.paired ? pt.gap : std::nan("")) / n_g;
+          if (have_electrical && p < electrical.solution().interface_conductance.size())
+            face_he[f] += electrical.solution().interface_conductance[p][i] / n_g;
+          if (p < htc.size() && i < static_cast<int>(htc[p].size())) face_htc[f] += htc[p][i] / n_g;
         }
-        face_p[f] = sp;
-        face_g[f] = sg;
-      }
-      fields.add_face_scalar("contact_pressure", pairings[p].slave_boundary(), face_p);
-      fields.add_face_scalar("contact_gap", pairings[p].slave_boundary(), face_g);
+      const std::string& b = pairings[p].slave_boundary();
+      fields.add_face_scalar("contact_pressure", b, face_p);
+      fields.add_face_scalar("contact_gap", b, face_g);
+      fields.add_face_scalar("electrical_conductance", b, face_he);
+      fields.add_face_scalar("thermal_conductance", b, face_htc);
     }
     series->write_step(t, mesh, fields);
   };
@@ -249,22 +346,136 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
     record(0.0);
     ++next_output;
   }
+  const double current_end = problem.schedule.current.time.back();
+  double nugget_energy_fraction = std::nan("");
   for (std::size_t k = 1; k < times.size(); ++k) {
-    const double t = times[k];
-    if (progress) progress({"weld", static_cast<int>(k), result.n_steps, t});
+    const double t = times[k], dt = times[k] - times[k - 1];
+    const double I = problem.schedule.current.at(t);
+    const contact::ContactState contact = contact_state(mech);
+    Eigen::VectorXd T_iter = thermal.committed_temperature();
+    int it = 0;
+    double change = 0;
+    for (it = 1; it <= problem.solver.max_coupling_iterations; ++it) {
+      std::vector<double> joule;
+      std::vector<std::vector<double>> interface_heat;
+      if (I != 0.0) {
+        clock.start("electrical");
+        try {
+          const auto& sol = electrical.solve(mech.positions(), T_iter, I, contact, thermal.bonding());
+          joule = sol.joule_heat;
+          interface_heat = sol.interface_heat;
+        } catch (const std::exception& e) {
+          return fail("weld stage, step " + std::to_string(k) + " (t = " + std::to_string(t * 1e3) +
+                      " ms), electrical: " + e.what());
+        }
+        have_electrical = true;
+      }
+      clock.start("thermal");
+      const auto report = thermal.solve(dt, mech.positions(), contact, joule, interface_heat);
+      if (!report.converged)
+        return fail("weld stage, step " + std::to_string(k) + " (t = " + std::to_string(t * 1e3) +
+                    " ms), thermal: " + report.message);
+      change = (thermal.temperature() - T_iter).lpNorm<Eigen::Infinity>();
+      T_iter = thermal.temperature();
+      if (I == 0.0 || change <= problem.solver.coupling_tolerance) break;
+    }
+    if (it > problem.solver.max_coupling_iterations)
+      return fail("weld stage, step " + std::to_string(k) + " (t = " + std::to_string(t * 1e3) +
+                  " ms): electro-thermal coupling did not converge in " +
+                  std::to_string(problem.solver.max_coupling_iterations) + " iterations (last change " +
+                  std::to_string(change) + " K)");
+    last_coupling = std::min(it, problem.solver.max_coupling_iterations);
+    result.n_coupling_iterations += last_coupling;
+    // Energy bookkeeping of the step (backward Euler: end-of-step power times dt).
+    last_current = I;
+    if (I != 0.0) {
+      const auto& sol = electrical.solution();
+      last_voltage = sol.voltage;
+      electrical_energy += sol.voltage * I * dt;
+      last_bulk_power = sol.bulk_power;
+      for (std::size_t p = 0; p < last_interface_power.size() && p < sol.interface_power.size(); ++p)
+        last_interface_power[p] = sol.interface_power[p];
+    } else {
+      last_voltage = 0;
+      last_bulk_power = 0;
+      std::fill(last_interface_power.begin(), last_interface_power.end(), 0.0);
+    }
+    stored_energy += thermal.energy().stored;
+    removed_energy += thermal.energy().removed();
+
+    if (progress)
+      progress({"weld", static_cast<int>(k), result.n_steps, t, T_iter.maxCoeff(),
+                I != 0.0 ? electrical.solution().resistance : 0.0});
+    if (std::getenv("RSW_VERBOSE"))
+      std::fprintf(stderr, "step %zu: t = %.1f ms, T_max = %.1f, T(apex) = %.1f, coupling %d\n", k, t * 1e3,
+                   T_iter.maxCoeff(), T_iter[mesh.boundary_nodes("upper_electrode.contact_face").front()], it);
+    // Sheets fuse where both sides of a sheet/sheet point have reached the solidus
+    // (committed bonding, or reached in this step): the mechanics ties them from this
+    // step on, so molten sheets never meet across a frictionless contact.
+    {
+      const auto& bonding = thermal.bonding();
+      const auto& pairings = mech.pairings();
+      std::vector<std::vector<char>> flags(pairings.size());
+      for (std::size_t p = 0; p < pairings.size(); ++p) {
+        flags[p].assign(pairings[p].points().size(), 0);
+        const bool sheet_sheet = pairings[p].name().rfind("ss_", 0) == 0;
+        for (std::size_t i = 0; i < flags[p].size(); ++i) {
+          const auto& pt = pairings[p].points()[i];
+          bool bonded = static_cast<int>(p) < bonding.n_interfaces() && bonding.bonded(static_cast<int>(p), static_cast<int>(i));
+          if (!bonded && sheet_sheet && pt.paired) {
+            const double Ts = pt.slave_weights[0] * T_iter[pt.slave_nodes[0]] + pt.slave_weights[1] * T_iter[pt.slave_nodes[1]];
+            const double Tm = pt.master_weights[0] * T_iter[pt.master_nodes[0]] + pt.master_weights[1] * T_iter[pt.master_nodes[1]];
+            bonded = Ts >= solidus[mesh.node_body[pt.slave_nodes[0]]] && Tm >= solidus[mesh.node_body[pt.master_nodes[0]]];
+          }
+          flags[p][i] = bonded;
+        }
+      }
+      mech.set_bonded(flags);
+    }
     clock.start("mechanics");
-    const auto report = mech.solve_force_step(problem.schedule.force.at(t), T);
+    const auto report = mech.solve_force_step(problem.schedule.force.at(t), T_iter);
     result.n_newton_iterations += report.iterations;
     if (!report.converged)
       return fail("weld stage, step " + std::to_string(k) + " (t = " + std::to_string(t * 1e3) +
                   " ms), mechanics: " + report.message);
     mech.commit();
+    thermal.commit();
+
+    if (std::abs(t - current_end) < 1e-12)
+      nugget_energy_fraction = nugget_enthalpy(mesh, mech.positions(), thermal.committed_temperature(),
+                                               peak_vector(), sheet_bodies, liquidus, body_materials,
+                                               problem.thermal.initial_temperature) /
+                               electrical_energy;
     if (is_output(t)) {
       clock.start("output");
       record(t);
       while (next_output * problem.output.interval <= t + 1e-9) ++next_output;
     }
   }
+  // Final nugget geometry (MODEL.md §8).
+  {
+    const auto peak = peak_vector();
+    const auto liq = measure_nugget(mesh, mech.positions(), peak, sheet_bodies, liquidus);
+    const auto sol = measure_nugget(mesh, mech.positions(), peak, sheet_bodies, solidus);
+    auto& n = result.nugget;
+    n = {{"d_n_liq", liq.diameter}, {"h_n_liq", liq.height}, {"d_n_sol", sol.diameter}, {"h_n_sol", sol.height}};
+    for (std::size_t k = 0; k < liq.penetration.size(); ++k)
+      n.emplace_back("penetration_" + problem.geometry.sheets[k].name, liq.penetration[k]);
+    double w = 0;
+    int n_es = 0;
+    for (const auto& st : mech.interface_states())
+      if (st.name.rfind("es_", 0) == 0) {
+        w += 2 * st.contact_radius;
+        ++n_es;
+      }
+    n.emplace_back("w_elec", n_es ? w / n_es : 0.0);
+    n.emplace_back("d_indent", indentation(problem, mesh, mech.displacement()));
+    n.emplace_back("t_unmolt", liq.unmolten_thickness);
+    result.energy = {{"electrical", electrical_energy}, {"stored", stored_energy}, {"removed", removed_energy},
+                     {"imbalance", electrical_energy - stored_energy - removed_energy},
+                     {"nugget_fraction", nugget_energy_fraction}};
+  }
+
   // Outputs.
   clock.start("output");
   {
@@ -299,6 +510,14 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
       h5.write(g + "/pressure", to_matrix(profiles_pressure[i]));
       h5.set_attribute(g + "/pressure", "unit", std::string("Pa"));
     }
+    for (const auto& [name, value] : result.nugget) {
+      h5.write("/nugget/" + name, std::vector<double>{value});
+      h5.set_attribute("/nugget/" + name, "unit", std::string(name.rfind("penetration", 0) == 0 ? "1" : "m"));
+    }
+    for (const auto& [name, value] : result.energy) {
+      h5.write("/energy/" + name, std::vector<double>{value});
+      h5.set_attribute("/energy/" + name, "unit", std::string(name == "nugget_fraction" ? "1" : "J"));
+    }
     h5.write_string("/run/config", problem.resolved_config);
     h5.set_attribute("/run", "version", std::string(RSW_VERSION));
     h5.set_attribute("/run", "case", problem.name);
@@ -327,6 +546,14 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
     j["wall_time_s"] = result.wall_time;
     j["weld_steps"] = result.n_steps;
     j["newton_iterations"] = result.n_newton_iterations;
+    j["coupling_iterations"] = result.n_coupling_iterations;
+    for (const auto& [name, value] : result.nugget) j["nugget"][name] = value;
+    for (const auto& [name, value] : result.energy) j["energy_J"][name] = value;
+    const int r_col = sig.column("resistance");
+    double r_peak = 0;
+    for (double r : sig.columns[r_col])
+      if (!std::isnan(r)) r_peak = std::max(r_peak, r);
+    j["dynamic_resistance_peak_ohm"] = r_peak;
     j["squeeze"]["electrode_displacement_m"] = result.squeeze_displacement;
     j["squeeze"]["indentation_m"] = result.squeeze_indentation;
     for (const auto& [name, r] : result.squeeze_contact_radius) j["squeeze"]["contact_radius_m"][name] = r;

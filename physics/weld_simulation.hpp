@@ -8,7 +8,9 @@
 //     every breakpoint of the current and force tables and every output time is a
 //     step boundary, and no step is longer than `solver.time_step`. The schedule
 //     depends on the case's tables and settings only, never on model parameters.
-//     Each step solves the mechanics at the step's force and temperature.
+//     Each step iterates electrical ⇄ thermal to `solver.coupling_tolerance` on the
+//     contact state of the last mechanics solve, then solves the mechanics at the
+//     step's force and new temperature (staggered coupling).
 //
 // Outputs, written into `<dir>.partial/` and moved to `<dir>/` only when the run has
 // finished (a failed run leaves `<dir>.partial/` with `failure.txt` and never a
@@ -48,10 +50,17 @@ struct RunResult {
   std::filesystem::path output_dir;
   Signals signals;
   double wall_time = 0;             // s
-  // Wall time per part of the run (s): "setup", "squeeze", "mechanics", "output".
+  // Wall time per part of the run (s): setup, squeeze, electrical, thermal, mechanics, output.
   std::vector<std::pair<std::string, double>> timing;
   int n_steps = 0;
   int n_newton_iterations = 0;
+  int n_coupling_iterations = 0;    // electro-thermal iterations, summed over steps
+  // Final nugget geometry (d_n_liq, h_n_liq, d_n_sol, h_n_sol, penetration_<sheet>,
+  // w_elec, d_indent, t_unmolt; m or fractions) and the energy balance (electrical,
+  // stored, removed, imbalance in J; nugget_fraction of the electrical energy held
+  // as enthalpy by the nugget when the current stops).
+  std::vector<std::pair<std::string, double>> nugget;
+  std::vector<std::pair<std::string, double>> energy;
   // Key results at the end of the squeeze.
   double squeeze_displacement = 0;  // m, upper end face travel (negative: down)
   std::vector<std::pair<std::string, double>> squeeze_contact_radius;  // per interface, m
@@ -63,6 +72,8 @@ struct Progress {
   std::string stage;  // "squeeze", "weld"
   int step = 0, n_steps = 0;
   double time = 0;    // s, weld-stage time
+  double max_temperature = 0;  // °C
+  double resistance = 0;       // Ω, V/I (0 without current)
 };
 
 // Runs the case and writes its outputs (see above). Never throws for a failing

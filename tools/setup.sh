@@ -19,6 +19,7 @@ packages=(
   libnlopt-cxx-dev         # optimiser for GP hyperparameters
   libudunits2-dev          # unit suffixes in config values (8 kA, 1.0 mm)
   python3-matplotlib python3-h5py python3-numpy   # plot scripts (/usr/bin/python3)
+  libopenmpi-dev openmpi-bin   # studies over MPI ranks (rsw study run under mpirun)
 )
 
 missing=()

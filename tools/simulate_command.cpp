@@ -30,7 +30,8 @@ void run_simulate(const SimulateOptions& options) {
       std::fprintf(stderr, "squeeze: seating and raising the force to %.3g kN ...\n",
                    problem.schedule.force.at(0.0) / 1e3);
     else
-      std::fprintf(stderr, "\rweld: step %d/%d, t = %.1f ms   ", p.step, p.n_steps, p.time * 1e3);
+      std::fprintf(stderr, "\rweld: step %d/%d, t = %.1f ms, T_max %.0f degC, R %.1f uOhm   ", p.step, p.n_steps,
+                   p.time * 1e3, p.max_temperature, p.resistance * 1e6);
   };
   const auto result = physics::run_weld(problem, dir, progress);
   if (!options.quiet) std::fprintf(stderr, "\n");

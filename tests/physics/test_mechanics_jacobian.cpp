@@ -1,6 +1,7 @@
 // The mechanical tangent (B̄ elements with the consistent J2 tangent, penalty contact
 // with friction) against central finite differences of the residual, on a coarse
 // weld case with plastic points, contact, stick and slip.
+#include "fem/quadtree.hpp"
 #include "meshes/weld_mesh.hpp"
 #include "physics/mechanics.hpp"
 #include "physics/problem.hpp"
@@ -77,4 +78,49 @@ TEST(MechanicsJacobian, FrictionlessTangentIsSymmetric) {
   mech.residual_and_tangent(zero, 3000.0, T, R, K);
   const fem::SparseMatrix Kt = K.transpose();
   EXPECT_LT((K - Kt).norm(), 1e-10 * K.norm());
+}
+
+// Two stacked blocks whose interface is tied (fused sheets): the tie is linear in the
+// displacements, so the tangent must match finite differences to round-off.
+TEST(MechanicsJacobian, TiedInterfaceTangentMatchesFiniteDifferences) {
+  fem::Mesh mesh;
+  auto block = [](const std::string& name, double z0, double z1, int n_r) {
+    fem::Quadtree tree(n_r, 2);
+    return tree.build(name, [=](double x, double y) { return fem::Point(1e-3 * x / n_r * 2, z0 + (z1 - z0) * y / 2); },
+                      [](double, double, fem::Side s) -> std::string {
+                        static const char* n[] = {"bottom", "right", "top", "axis"};
+                        return n[static_cast<int>(s)];
+                      });
+  };
+  mesh = block("upper", 0.0, 0.5e-3, 4);
+  mesh.append(block("lower", -0.5e-3, 0.0, 5));
+  mesh.interfaces["tie"] = {"upper.bottom", "lower.top"};
+  materials::MaterialLibrary library;
+  const auto steel = library.load("DP1200");
+  physics::MechanicsSettings s;
+  s.fixed_boundary = "lower.bottom";
+  s.loaded_boundary = "upper.top";
+  s.friction_coefficient = 0.3;
+  physics::Mechanics mech(mesh, {&steel, &steel}, s, 20.0);
+  std::vector<std::vector<char>> all(1, std::vector<char>(mech.pairings()[0].points().size(), 1));
+  mech.set_bonded(all);
+  const Eigen::VectorXd T = Eigen::VectorXd::Constant(mesh.n_nodes(), 1600.0);  // molten
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> normal;
+  Eigen::VectorXd y(mech.n_free_force_control()), v(mech.n_free_force_control());
+  for (int i = 0; i < y.size(); ++i) {
+    y[i] = 1e-6 * normal(rng);
+    v[i] = 1e-6 * normal(rng);
+  }
+  const Eigen::VectorXd base = mech.full_increment(y);
+  Eigen::VectorXd R, Rp, Rm;
+  fem::SparseMatrix K, dummy;
+  mech.residual_and_tangent(base, 100.0, T, R, K);
+  const double h = 1e-4;
+  mech.residual_and_tangent(base + mech.full_increment(h * v), 100.0, T, Rp, dummy);
+  mech.residual_and_tangent(base - mech.full_increment(h * v), 100.0, T, Rm, dummy);
+  const Eigen::VectorXd fd = -(Rp - Rm) / (2 * h), Kv = K * v;
+  const double err = (fd - Kv).norm() / Kv.norm();
+  std::printf("tied interface: relative difference %.2e\n", err);
+  EXPECT_LT(err, 1e-6);
 }

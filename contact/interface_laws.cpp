@@ -1,0 +1,142 @@
+// Interface laws: Bay–Wanheim electrical conductance, Simufact thermal conductance,
+// closure factor, interface Joule heat and bonding; equations in interface_laws.hpp.
+#include "contact/interface_laws.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace rsw::contact {
+
+ElectricalConductanceLaw bay_wanheim_conductance(double normal_stress, double flow_stress, double mean_resistivity,
+                                                 double coating_resistivity, double film_thickness) {
+  // h_e = σ_n / (t_f D),  D = 3 σ_soft ρ̄ + ρ_c σ_n  (paper eq. 1 multiplied through by σ_n)
+  const double sn = std::max(normal_stress, 0.0);
+  const double D = 3 * flow_stress * mean_resistivity + coating_resistivity * sn;
+  const double tD2 = film_thickness * D * D;
+  ElectricalConductanceLaw out;
+  out.conductance = sn / (film_thickness * D);
+  out.d_normal_stress = normal_stress > 0 ? 3 * flow_stress * mean_resistivity / tD2 : 0.0;
+  out.d_flow_stress = -3 * sn * mean_resistivity / tD2;
+  out.d_resistivity = -3 * sn * flow_stress / tD2;
+  return out;
+}
+
+ThermalConductanceLaw simufact_conductance(double normal_stress, double yield_stress, double mean_conductivity,
+                                           double p1, const ThermalContactConstants& c) {
+  // HTC = P1 c̄/P2 E^P4,  E = 1 − exp(−u),  u = P3 (F_n/σ_d + P3)  (paper eq. 2)
+  const double fn = std::max(normal_stress, 0.0);
+  const double u = c.p3 * (fn / yield_stress + c.p3);
+  const double decay = std::exp(-u);
+  const double E = 1 - decay;
+  const double scale = p1 * mean_conductivity / c.p2;
+  const double Ep = std::pow(E, c.p4);
+  const double dHdu = scale * c.p4 * std::pow(E, c.p4 - 1) * decay;  // ∂HTC/∂u
+  ThermalConductanceLaw out;
+  out.conductance = scale * Ep;
+  out.d_normal_stress = normal_stress > 0 ? dHdu * c.p3 / yield_stress : 0.0;
+  out.d_yield_stress = -dHdu * c.p3 * fn / (yield_stress * yield_stress);
+  out.d_conductivity = p1 / c.p2 * Ep;
+  return out;
+}
+
+Slope closure_factor(double gap, double closure_gap) {
+  // χ = 1 − (3 s² − 2 s³), s = g/g_c clamped to [0, 1]
+  const double s = gap / closure_gap;
+  if (s <= 0) return {1.0, 0.0};
+  if (s >= 1) return {0.0, 0.0};
+  return {1 - s * s * (3 - 2 * s), -6 * s * (1 - s) / closure_gap};
+}
+
+Slope interface_joule_heat(double conductance, double potential_jump) {
+  return {conductance * potential_jump * potential_jump, 2 * conductance * potential_jump};
+}
+
+double bonded_conductance(double conductivity_1, double conductivity_2, double local_size, double factor) {
+  // F · (k_1 + k_2)/2 · 2/h_local
+  return factor * (conductivity_1 + conductivity_2) / local_size;
+}
+
+bool bonds(double temperature_slave, double solidus_slave, double temperature_master, double solidus_master) {
+  return temperature_slave >= solidus_slave && temperature_master >= solidus_master;
+}
+
+const InterfaceProperties& InterfaceModel::at(const std::string& name) const {
+  for (const auto& p : interfaces)
+    if (p.name == name) return p;
+  throw std::out_of_range("interface model has no interface '" + name + "'");
+}
+
+namespace {
+// The softer side's yield stress σ_y(0, T) and its temperature slope.
+materials::PropertyValue softer_yield_stress(const materials::Material& a, const materials::Material& b, double T) {
+  const materials::FlowStress ya = a.yield_stress(0.0, T);
+  const materials::FlowStress yb = b.yield_stress(0.0, T);
+  const materials::FlowStress& y = ya.yield_stress <= yb.yield_stress ? ya : yb;
+  return {y.yield_stress, y.temperature_slope};
+}
+}  // namespace
+
+Conductance electrical_contact_conductance(const materials::Material& a, const materials::Material& b,
+                                           double normal_stress, double interface_temperature,
+                                           const InterfaceProperties& properties) {
+  const materials::PropertyValue soft = softer_yield_stress(a, b, interface_temperature);
+  const materials::PropertyValue ra = a.electrical_resistivity(interface_temperature);
+  const materials::PropertyValue rb = b.electrical_resistivity(interface_temperature);
+  const double mean_rho = 0.5 * (ra.value + rb.value);
+  const auto law = bay_wanheim_conductance(normal_stress, soft.value, mean_rho, properties.coating_resistivity,
+                                           properties.film_thickness);
+  return {law.conductance, law.d_normal_stress,
+          law.d_flow_stress * soft.slope + law.d_resistivity * 0.5 * (ra.slope + rb.slope)};
+}
+
+Conductance thermal_contact_conductance(const materials::Material& a, const materials::Material& b,
+                                        double normal_stress, double interface_temperature,
+                                        const InterfaceProperties& properties,
+                                        const ThermalContactConstants& constants) {
+  const materials::PropertyValue soft = softer_yield_stress(a, b, interface_temperature);
+  const materials::PropertyValue ka = a.thermal_conductivity(interface_temperature);
+  const materials::PropertyValue kb = b.thermal_conductivity(interface_temperature);
+  const auto law =
+      simufact_conductance(normal_stress, soft.value, 0.5 * (ka.value + kb.value), properties.htc_p1, constants);
+  return {law.conductance, law.d_normal_stress,
+          law.d_yield_stress * soft.slope + law.d_conductivity * 0.5 * (ka.slope + kb.slope)};
+}
+
+Conductance bonded_electrical_conductance(const materials::Material& a, const materials::Material& b,
+                                          double interface_temperature, double local_size, double factor) {
+  const materials::PropertyValue ra = a.electrical_resistivity(interface_temperature);
+  const materials::PropertyValue rb = b.electrical_resistivity(interface_temperature);
+  // σ = 1/ρ_e, dσ/dT = −ρ_e'/ρ_e²
+  const double sa = 1 / ra.value, sb = 1 / rb.value;
+  const double dsa = -ra.slope * sa * sa, dsb = -rb.slope * sb * sb;
+  return {bonded_conductance(sa, sb, local_size, factor), 0.0, bonded_conductance(dsa, dsb, local_size, factor)};
+}
+
+Conductance bonded_thermal_conductance(const materials::Material& a, const materials::Material& b,
+                                       double interface_temperature, double local_size, double factor) {
+  const materials::PropertyValue ka = a.thermal_conductivity(interface_temperature);
+  const materials::PropertyValue kb = b.thermal_conductivity(interface_temperature);
+  return {bonded_conductance(ka.value, kb.value, local_size, factor), 0.0,
+          bonded_conductance(ka.slope, kb.slope, local_size, factor)};
+}
+
+BondingState::BondingState(const std::vector<InterfacePairing>& pairings) {
+  for (const auto& p : pairings) flags_.emplace_back(p.points().size(), 0);
+}
+
+int BondingState::n_bonded(int interface) const {
+  if (flags_.empty()) return 0;
+  return static_cast<int>(std::count(flags_[interface].begin(), flags_[interface].end(), 1));
+}
+
+std::vector<double> slave_face_lengths(const fem::Mesh& mesh, const InterfacePairing& pairing) {
+  std::vector<double> out(pairing.n_slave_faces());
+  for (int f = 0; f < pairing.n_slave_faces(); ++f) {
+    const auto& n = pairing.points()[f * pairing.n_gauss()].slave_nodes;
+    out[f] = (mesh.nodes[n[1]] - mesh.nodes[n[0]]).norm();
+  }
+  return out;
+}
+
+}  // namespace rsw::contact

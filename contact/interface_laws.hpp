@@ -1,0 +1,179 @@
+// Interface laws of the electrode/sheet (E/S) and sheet/sheet (S/S) contacts: what
+// crosses a paired contact point per unit area, as pure functions of the local state
+// returning the value and the derivatives the field solvers need.
+//
+// Electrical contact conductance, Bay–Wanheim (paper eq. 1, as in Simufact):
+//     ρ_contact = 3 (σ_soft/σ_n) (ρ_1 + ρ_2)/2 + ρ_c,   h_e = 1/(ρ_contact t_f)   [S/m²]
+// written as h_e = σ_n / (t_f (3 σ_soft ρ̄ + ρ_c σ_n)), ρ̄ = (ρ_1 + ρ_2)/2, so that
+// σ_n → 0 gives h_e → 0 smoothly (no division by zero; σ_n < 0 is read as 0).
+// σ_soft: the smaller of the two sides' yield stresses σ_y(ε_p = 0, T) (flow stress of
+// the softer material, strength floor included above the solidus); ρ_1, ρ_2: bulk
+// resistivities; ρ_c: coating resistivity (Ω·m); t_f: film thickness (m).
+//
+// Thermal contact conductance, Simufact form (paper eq. 2):
+//     HTC = P1 (c_1 + c_2)/2 (1/P2) (1 − exp(−P3 (F_n/σ_d + P3)))^P4   [W/(m²K)]
+// c_i: table thermal conductivities of the two sides (the λ_m modification of paper
+// eq. 3 models convection in the bulk melt and is not applied here); F_n: contact
+// normal stress (Pa); σ_d: yield stress of the softer side; P2 = 1 µm, P3 = P4 = 1 by
+// default (MODEL.md §4). The formula is finite at F_n = 0 (≈ 0.63 P1 c̄/P2), so it is
+// applied on closed contact only; to keep the outputs smooth in the parameters the
+// flux is multiplied by a C¹ closure factor of the gap g (our choice):
+//     χ(g) = 1 − (3 s² − 2 s³),  s = clamp(g/g_c, 0, 1),
+// χ = 1 for g ≤ 0 (closed), 0 for g ≥ g_c (open), default g_c = 1 µm: a point that
+// opens loses its thermal contact over the first micrometre instead of at once.
+//
+// Interface Joule heat: q_s = h_e (φ⁺ − φ⁻)² per unit area (W/m²), released half on
+// each side of the interface (the MOOSE/MALAMUTE convention of MODEL.md §3).
+//
+// Interface temperature (our choice, the paper is silent): the mean of the two sides'
+// temperatures at the point, T_i = (T_slave + T_master)/2; every material property
+// of eqs. 1 and 2 is evaluated at T_i, for both sides.
+//
+// Bonding (our choice, MODEL.md §3): a S/S point whose two sides have both reached
+// their solidus is bonded for good (history flag per pairing point, committed after
+// a converged step). A bonded point conducts like bulk material: electrical and
+// thermal conductance h = F · k̄ · 2/h_local, k̄ the mean of the two sides' bulk
+// conductivities (σ = 1/ρ_e, or the table k) at T_i and h_local the length of the
+// slave face in the undeformed mesh. 2 k̄/h_local is the conductance of a layer of
+// half a cell; the factor F (default 10³) makes the bonded interface's resistance
+// 1/(2000) of one cell's and about 10⁻⁵ of the sheet stack's, negligible, while
+// keeping the assembled systems well conditioned for the direct solvers.
+//
+// Sources: paper §2.1.1 (eqs. 1, 2); N. Bay and T. Wanheim, Wear 38 (1976) 201–209
+// (real contact area against normal stress); MOOSE electrical contact and MALAMUTE
+// interface heating verification problems (closed-form two-block solutions).
+#pragma once
+
+#include "contact/interface_pairing.hpp"
+#include "materials/material.hpp"
+
+#include <string>
+#include <vector>
+
+namespace rsw::contact {
+
+// ---------------------------------------------------------------------------------
+// Pure laws (numbers in, value and partial derivatives out).
+
+// h_e of paper eq. 1 and its partial derivatives.
+struct ElectricalConductanceLaw {
+  double conductance = 0;      // S/m², h_e
+  double d_normal_stress = 0;  // ∂h_e/∂σ_n, S/(m²·Pa)
+  double d_flow_stress = 0;    // ∂h_e/∂σ_soft
+  double d_resistivity = 0;    // ∂h_e/∂ρ̄, S/(m²·Ω·m)
+};
+// h_e = σ_n / (t_f (3 σ_soft ρ̄ + ρ_c σ_n)); σ_n in Pa (< 0 read as 0), σ_soft in Pa,
+// ρ̄ and ρ_c in Ω·m, t_f in m.
+ElectricalConductanceLaw bay_wanheim_conductance(double normal_stress, double flow_stress,
+                                                 double mean_resistivity, double coating_resistivity,
+                                                 double film_thickness);
+
+// HTC of paper eq. 2 and its partial derivatives.
+struct ThermalConductanceLaw {
+  double conductance = 0;       // W/(m²K), HTC
+  double d_normal_stress = 0;   // ∂HTC/∂F_n
+  double d_yield_stress = 0;    // ∂HTC/∂σ_d
+  double d_conductivity = 0;    // ∂HTC/∂c̄, c̄ = (c_1 + c_2)/2
+};
+// Constants of eq. 2 (P1 is per interface type, see InterfaceProperties).
+struct ThermalContactConstants {
+  double p2 = 1e-6;  // m
+  double p3 = 1.0;   // -
+  double p4 = 1.0;   // -
+};
+// HTC = P1 c̄ /P2 (1 − exp(−P3 (F_n/σ_d + P3)))^P4; F_n in Pa (< 0 read as 0).
+ThermalConductanceLaw simufact_conductance(double normal_stress, double yield_stress, double mean_conductivity,
+                                           double p1, const ThermalContactConstants& constants);
+
+// A value and its derivative with respect to its one argument.
+struct Slope {
+  double value = 0;
+  double slope = 0;
+};
+// χ(g) and dχ/dg (1/m): 1 for g ≤ 0, 0 for g ≥ g_c, C¹ in between.
+Slope closure_factor(double gap, double closure_gap);
+// q_s = h_e Δφ² (W/m²) and dq_s/dΔφ, Δφ = φ_slave − φ_master.
+Slope interface_joule_heat(double conductance, double potential_jump);
+// h = F (k_1 + k_2)/2 · 2/h_local = F (k_1 + k_2)/h_local, per unit area; k in S/m or
+// W/(m·K), h_local in m.
+double bonded_conductance(double conductivity_1, double conductivity_2, double local_size, double factor);
+// A S/S point bonds when both sides are at or above their solidus (°C).
+bool bonds(double temperature_slave, double solidus_slave, double temperature_master, double solidus_master);
+
+// ---------------------------------------------------------------------------------
+// The laws with material properties evaluated at the interface temperature.
+
+// Parameters of one interface (in mesh.interfaces order in an InterfaceModel).
+struct InterfaceProperties {
+  std::string name;                // mesh interface
+  double film_thickness = 0;       // m, t_f
+  double coating_resistivity = 0;  // Ω·m, ρ_c
+  double htc_p1 = 0;               // -, P1
+  bool bonding = false;            // sheet/sheet: bonds when both sides pass the solidus
+};
+
+struct InterfaceModel {
+  std::vector<InterfaceProperties> interfaces;  // one per mesh interface, in map order
+  ThermalContactConstants thermal;
+  double closure_gap = 1e-6;                    // m, g_c of χ(g)
+  double bonded_factor = 1e3;                   // F of the bonded conductance
+  // The entry of a named interface; throws std::out_of_range.
+  const InterfaceProperties& at(const std::string& name) const;
+};
+
+// A conductance with its derivatives with respect to the normal stress and to the
+// interface temperature T_i (through the temperature-dependent properties).
+struct Conductance {
+  double value = 0;          // S/m² or W/(m²K)
+  double d_pressure = 0;     // per Pa
+  double d_temperature = 0;  // per K
+};
+
+// Bay–Wanheim h_e between materials a and b at T_i and normal stress σ_n. The min()
+// choosing the softer side is only C⁰ where the two yield curves cross.
+Conductance electrical_contact_conductance(const materials::Material& a, const materials::Material& b,
+                                           double normal_stress, double interface_temperature,
+                                           const InterfaceProperties& properties);
+// Simufact HTC between materials a and b at T_i and normal stress F_n (no closure factor).
+Conductance thermal_contact_conductance(const materials::Material& a, const materials::Material& b,
+                                        double normal_stress, double interface_temperature,
+                                        const InterfaceProperties& properties, const ThermalContactConstants& constants);
+// Bonded conductances (σ = 1/ρ_e of both sides, or their table k) at T_i.
+Conductance bonded_electrical_conductance(const materials::Material& a, const materials::Material& b,
+                                          double interface_temperature, double local_size, double factor);
+Conductance bonded_thermal_conductance(const materials::Material& a, const materials::Material& b,
+                                       double interface_temperature, double local_size, double factor);
+
+// ---------------------------------------------------------------------------------
+// State shared by the electrical and thermal solvers.
+
+// The mechanical contact state: the pairings (one per mesh interface, in
+// mesh.interfaces order, projected at the current configuration) and the contact
+// normal stress at each of their points (Pa). physics::contact_state(Mechanics)
+// builds it from the mechanics solver.
+struct ContactState {
+  const std::vector<InterfacePairing>* pairings = nullptr;
+  std::vector<std::vector<double>> pressure;  // per interface, per pairing point
+};
+
+// Bonded flags per pairing point of every interface: history, set once and kept.
+class BondingState {
+ public:
+  BondingState() = default;
+  explicit BondingState(const std::vector<InterfacePairing>& pairings);
+
+  bool empty() const { return flags_.empty(); }
+  int n_interfaces() const { return static_cast<int>(flags_.size()); }
+  bool bonded(int interface, int point) const { return !flags_.empty() && flags_[interface][point] != 0; }
+  void bond(int interface, int point) { flags_[interface][point] = 1; }
+  int n_bonded(int interface) const;
+
+ private:
+  std::vector<std::vector<char>> flags_;
+};
+
+// Length of every slave face of a pairing in the undeformed mesh (h_local of the
+// bonded conductance), m.
+std::vector<double> slave_face_lengths(const fem::Mesh& mesh, const InterfacePairing& pairing);
+
+}  // namespace rsw::contact

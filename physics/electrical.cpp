@@ -1,0 +1,478 @@
+// Electrical conduction with contact interfaces; see electrical.hpp.
+#include "physics/electrical.hpp"
+
+#include "fem/assembler.hpp"
+#include "fem/constraints.hpp"
+#include "fem/dof_map.hpp"
+#include "fem/fe_values.hpp"
+#include "fem/linear_solver.hpp"
+
+#include <Eigen/LU>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+
+namespace rsw::physics {
+
+namespace {
+using Matrix4 = Eigen::Matrix<double, 4, 4>;
+
+int find_root(std::vector<int>& parent, int i) {
+  while (parent[i] != i) i = parent[i] = parent[parent[i]];
+  return i;
+}
+}  // namespace
+
+PointLocation locate_point(const fem::Mesh& mesh, const fem::Point& point) {
+  constexpr double tolerance = 1e-9;
+  for (int e = 0; e < mesh.n_cells(); ++e) {
+    const auto& c = mesh.cells[e];
+    double r0 = 1e300, r1 = -1e300, z0 = 1e300, z1 = -1e300;
+    for (int n : c) {
+      r0 = std::min(r0, mesh.nodes[n].x());
+      r1 = std::max(r1, mesh.nodes[n].x());
+      z0 = std::min(z0, mesh.nodes[n].y());
+      z1 = std::max(z1, mesh.nodes[n].y());
+    }
+    const double slack = 1e-9 * std::max(r1 - r0, z1 - z0);
+    if (point.x() < r0 - slack || point.x() > r1 + slack || point.y() < z0 - slack || point.y() > z1 + slack) continue;
+    // Newton on x(ξ, η) = point from the cell centre.
+    Eigen::Vector2d xi = Eigen::Vector2d::Zero();
+    for (int it = 0; it < 30; ++it) {
+      const auto N = fem::shape_values(xi.x(), xi.y());
+      const auto dN = fem::shape_gradients_ref(xi.x(), xi.y());
+      Eigen::Vector2d x = Eigen::Vector2d::Zero();
+      Eigen::Matrix2d J = Eigen::Matrix2d::Zero();
+      for (int a = 0; a < 4; ++a) {
+        x += N[a] * mesh.nodes[c[a]];
+        J += mesh.nodes[c[a]] * dN[a].transpose();
+      }
+      const Eigen::Vector2d step = J.inverse() * (point - x);
+      xi += step;
+      if (step.norm() < 1e-14) break;
+    }
+    if (std::abs(xi.x()) <= 1 + tolerance && std::abs(xi.y()) <= 1 + tolerance)
+      return {e, std::clamp(xi.x(), -1.0, 1.0), std::clamp(xi.y(), -1.0, 1.0)};
+  }
+  throw std::out_of_range("no cell holds the point (" + std::to_string(point.x()) + ", " +
+                          std::to_string(point.y()) + ") m");
+}
+
+double interpolate(const fem::Mesh& mesh, const PointLocation& where, const Eigen::VectorXd& nodal) {
+  const auto N = fem::shape_values(where.xi, where.eta);
+  double u = 0;
+  for (int a = 0; a < 4; ++a) u += N[a] * nodal[mesh.cells[where.cell][a]];
+  return u;
+}
+
+double ElectricalSolution::total_interface_power() const {
+  return std::accumulate(interface_power.begin(), interface_power.end(), 0.0);
+}
+
+struct Electrical::Impl {
+  const fem::Mesh& mesh;
+  fem::Mesh current;  // the configuration of the last solve
+  ElectricalSettings settings;
+  contact::InterfaceModel model;
+  std::vector<const materials::Material*> body_material;
+  std::vector<const materials::Material*> cell_material;
+  int n_q;
+
+  fem::DofMap dofs;
+  int voltage_dof;
+  fem::Constraints constraints;
+  std::vector<contact::InterfacePairing> pairings;  // the coupling pattern
+  std::vector<std::vector<double>> face_length;     // per pairing, per slave face (undeformed), m
+  std::vector<std::pair<int, int>> groups;          // (pairing, slave face)
+  std::unique_ptr<fem::Assembler> assembler;
+  fem::LinearSolver solver{fem::SolverKind::cholmod};
+  fem::SparseMatrix K;
+  Eigen::VectorXd F;
+
+  Eigen::VectorXd ground_weight;  // 1 on the ground face, hanging nodes interpolated
+  std::vector<int> ground_cells;
+  int ground_body = -1;
+  std::vector<std::array<PointLocation, 2>> probes;
+
+  // Inputs of the current solve.
+  const Eigen::VectorXd* temperature = nullptr;
+  const contact::ContactState* contact = nullptr;
+  // Gauss-point data (current configuration): σ of the last assembly, geometry.
+  std::vector<double> sigma, JxW;
+  std::vector<Eigen::Vector2d> grad;  // per cell Gauss point, 4 shape functions
+  std::vector<std::array<double, 4>> shape;  // N_a at the reference Gauss points
+  bool geometry_valid = false;
+
+  Impl(const fem::Mesh& m, std::vector<const materials::Material*> materials_of_body, contact::InterfaceModel mdl,
+       const ElectricalSettings& s)
+      : mesh(m),
+        current(m),
+        settings(s),
+        model(std::move(mdl)),
+        body_material(std::move(materials_of_body)),
+        n_q(s.n_gauss * s.n_gauss),
+        dofs(m, 1, 1),
+        voltage_dof(dofs.extra_dof(0)),
+        constraints(dofs.n_dofs()) {
+    if (s.n_gauss < 1 || s.n_gauss > 3) throw std::invalid_argument("Electrical: n_gauss must be 1, 2 or 3");
+    if (static_cast<int>(body_material.size()) != mesh.n_bodies())
+      throw std::invalid_argument("Electrical: one material per body expected");
+    if (model.interfaces.size() != mesh.interfaces.size())
+      throw std::invalid_argument("Electrical: the interface model must list every mesh interface");
+    for (int e = 0; e < mesh.n_cells(); ++e) cell_material.push_back(body_material[mesh.cell_body[e]]);
+
+    constraints.add_hanging_nodes(mesh, dofs);
+    constraints.constrain_boundary(mesh, dofs, s.ground_boundary, 0, [](const fem::Point&) { return 0.0; });
+    for (int n : mesh.boundary_nodes(s.current_boundary)) constraints.add_line(dofs.dof(n, 0), {{voltage_dof, 1.0}});
+    constraints.close();
+
+    std::vector<std::vector<int>> dof_groups;
+    std::size_t k = 0;
+    for (const auto& [name, pair] : mesh.interfaces) {
+      if (model.interfaces[k++].name != name)
+        throw std::invalid_argument("Electrical: interface model out of order at '" + name + "'");
+      pairings.emplace_back(mesh, name, s.n_gauss, s.search_margin);
+      const auto& pairing = pairings.back();
+      face_length.push_back(contact::slave_face_lengths(mesh, pairing));
+      const int p = static_cast<int>(pairings.size()) - 1;
+      for (int f = 0; f < pairing.n_slave_faces(); ++f) {
+        groups.emplace_back(p, f);
+        std::vector<int> g;
+        for (int n : pairing.coupling_nodes(f)) g.push_back(dofs.dof(n, 0));
+        dof_groups.push_back(std::move(g));
+      }
+    }
+    assembler = std::make_unique<fem::Assembler>(mesh, dofs, constraints, dof_groups);
+
+    ground_weight = Eigen::VectorXd::Zero(mesh.n_nodes());
+    for (int n : mesh.boundary_nodes(s.ground_boundary)) ground_weight[n] = 1.0;
+    for (const auto& h : mesh.hanging_nodes)
+      ground_weight[h.node] = 0.5 * (ground_weight[h.parents[0]] + ground_weight[h.parents[1]]);
+    for (int e = 0; e < mesh.n_cells(); ++e) {
+      bool touches = false;
+      for (int n : mesh.cells[e]) touches = touches || ground_weight[n] != 0;
+      if (touches) ground_cells.push_back(e);
+    }
+    ground_body = mesh.node_body[mesh.boundary_nodes(s.ground_boundary).front()];
+    for (const auto& probe : s.probes) probes.push_back({locate_point(mesh, probe.upper), locate_point(mesh, probe.lower)});
+
+    const std::size_t n_points = static_cast<std::size_t>(mesh.n_cells()) * n_q;
+    sigma.assign(n_points, 0.0);
+    JxW.assign(n_points, 0.0);
+    grad.assign(4 * n_points, Eigen::Vector2d::Zero());
+    fem::CellValues cv(s.n_gauss);
+    cv.reinit(mesh, 0);
+    for (int q = 0; q < n_q; ++q) shape.push_back({cv.N(q, 0), cv.N(q, 1), cv.N(q, 2), cv.N(q, 3)});
+  }
+
+  void check_contact(const contact::ContactState& state) const {
+    if (!state.pairings || state.pairings->size() != pairings.size() || state.pressure.size() != pairings.size())
+      throw std::invalid_argument("Electrical: the contact state must hold one pairing and one pressure list per interface");
+    for (std::size_t p = 0; p < pairings.size(); ++p) {
+      const auto& given = (*state.pairings)[p];
+      const auto& own = pairings[p];
+      bool same = given.name() == own.name() && given.n_gauss() == own.n_gauss() &&
+                  given.n_slave_faces() == own.n_slave_faces() && state.pressure[p].size() == given.points().size();
+      for (int f = 0; same && f < own.n_slave_faces(); ++f) same = given.coupling_nodes(f) == own.coupling_nodes(f);
+      if (!same)
+        throw std::invalid_argument("Electrical: pairing '" + own.name() +
+                                    "' of the contact state differs from the solver's (n_gauss, search margin?)");
+    }
+  }
+
+  // Interface temperature and the materials of the two sides of a pairing point.
+  struct Sides {
+    double slave_temperature, master_temperature;
+    const materials::Material* slave;
+    const materials::Material* master;
+    double interface_temperature() const { return 0.5 * (slave_temperature + master_temperature); }
+  };
+  Sides sides(const contact::ContactPoint& pt) const {
+    const Eigen::VectorXd& T = *temperature;
+    Sides s;
+    s.slave_temperature = pt.slave_weights[0] * T[pt.slave_nodes[0]] + pt.slave_weights[1] * T[pt.slave_nodes[1]];
+    s.master_temperature = pt.master_weights[0] * T[pt.master_nodes[0]] + pt.master_weights[1] * T[pt.master_nodes[1]];
+    s.slave = body_material[mesh.node_body[pt.slave_nodes[0]]];
+    s.master = body_material[mesh.node_body[pt.master_nodes[0]]];
+    return s;
+  }
+
+  // h_e at every pairing point (0 where unpaired, open or outside the pattern).
+  void interface_conductances(const contact::BondingState& bonding, std::vector<std::vector<double>>& out) const {
+    out.resize(pairings.size());
+    for (std::size_t p = 0; p < pairings.size(); ++p) {
+      const auto& pairing = (*contact->pairings)[p];
+      const auto& props = model.interfaces[p];
+      out[p].assign(pairing.points().size(), 0.0);
+      for (std::size_t i = 0; i < pairing.points().size(); ++i) {
+        const auto& pt = pairing.points()[i];
+        if (!pt.paired || pairing.local_index(pt.slave_face, pt.master_nodes[0]) < 0 ||
+            pairing.local_index(pt.slave_face, pt.master_nodes[1]) < 0)
+          continue;
+        const Sides s = sides(pt);
+        const bool bonded = props.bonding && bonding.bonded(static_cast<int>(p), static_cast<int>(i));
+        if (bonded) {
+          out[p][i] = contact::bonded_electrical_conductance(*s.slave, *s.master, s.interface_temperature(),
+                                                             face_length[p][pt.slave_face], model.bonded_factor)
+                          .value;
+        } else if (contact->pressure[p][i] > 0) {
+          out[p][i] = contact::electrical_contact_conductance(*s.slave, *s.master, contact->pressure[p][i],
+                                                              s.interface_temperature(), props)
+                          .value;
+        }
+      }
+    }
+  }
+
+  // Every body must reach the ground body through conducting interface points.
+  void check_current_path(const std::vector<std::vector<double>>& h) const {
+    std::vector<int> parent(mesh.n_bodies());
+    std::iota(parent.begin(), parent.end(), 0);
+    for (std::size_t p = 0; p < pairings.size(); ++p) {
+      const auto& points = (*contact->pairings)[p].points();
+      for (std::size_t i = 0; i < points.size(); ++i)
+        if (h[p][i] > 0) {
+          const int a = find_root(parent, mesh.node_body[points[i].slave_nodes[0]]);
+          const int b = find_root(parent, mesh.node_body[points[i].master_nodes[0]]);
+          parent[a] = b;
+        }
+    }
+    const int ground = find_root(parent, ground_body);
+    for (int b = 0; b < mesh.n_bodies(); ++b)
+      if (find_root(parent, b) != ground)
+        throw std::runtime_error("Electrical: body '" + mesh.body_names[b] +
+                                 "' has no conducting path to the ground face (no closed contact)");
+  }
+
+  // Gauss-point geometry (∇N, JxW) of every cell for the node positions; kept while
+  // the positions do not change (the coupling iterations of one step).
+  void update_geometry(const std::vector<fem::Point>& positions) {
+    if (geometry_valid && positions == current.nodes) return;
+    current.nodes = positions;
+    fem::CellValues cv(settings.n_gauss);
+    for (int e = 0; e < mesh.n_cells(); ++e) {
+      cv.reinit(current, e);
+      for (int q = 0; q < n_q; ++q) {
+        const std::size_t k = static_cast<std::size_t>(e) * n_q + q;
+        JxW[k] = cv.JxW(q);
+        for (int a = 0; a < 4; ++a) grad[4 * k + a] = cv.grad_N(q, a);
+      }
+    }
+    geometry_valid = true;
+  }
+
+  // ∫ σ ∇N_a·∇N_b dV with σ = 1/ρ_e(T) at each Gauss point.
+  void cell_kernel(int e, fem::LocalSystem& local) {
+    const auto& c = mesh.cells[e];
+    const Eigen::VectorXd& T = *temperature;
+    const materials::Material& mat = *cell_material[e];
+    Matrix4 Ke = Matrix4::Zero();
+    for (int q = 0; q < n_q; ++q) {
+      double Tq = 0;
+      for (int a = 0; a < 4; ++a) Tq += shape[q][a] * T[c[a]];
+      const std::size_t k = static_cast<std::size_t>(e) * n_q + q;
+      sigma[k] = 1.0 / mat.electrical_resistivity(Tq).value;
+      const double w = sigma[k] * JxW[k];
+      const Eigen::Vector2d* g = &grad[4 * k];
+      for (int a = 0; a < 4; ++a)
+        for (int b = a; b < 4; ++b) Ke(a, b) += w * g[a].dot(g[b]);
+    }
+    for (int a = 0; a < 4; ++a)
+      for (int b = 0; b < a; ++b) Ke(a, b) = Ke(b, a);
+    local.matrix += Ke;
+  }
+
+  // Σ_points h_e A (v_s − v_m)(φ_s − φ_m) over the points of one slave face.
+  void group_kernel(int g, const std::vector<std::vector<double>>& h, fem::LocalSystem& local) const {
+    const auto [p, f] = groups[g];
+    const auto& pairing = (*contact->pairings)[p];
+    const int n_local = static_cast<int>(local.vector.size());
+    Eigen::VectorXd jump(n_local);
+    for (int k = 0; k < pairing.n_gauss(); ++k) {
+      const int i = f * pairing.n_gauss() + k;
+      if (h[p][i] == 0) continue;
+      const auto& pt = pairing.points()[i];
+      jump.setZero();
+      for (int s = 0; s < 2; ++s) {
+        jump[pairing.local_index(f, pt.slave_nodes[s])] += pt.slave_weights[s];
+        jump[pairing.local_index(f, pt.master_nodes[s])] -= pt.master_weights[s];
+      }
+      local.matrix.noalias() += h[p][i] * pt.area * jump * jump.transpose();
+    }
+  }
+};
+
+Electrical::Electrical(const fem::Mesh& mesh, std::vector<const materials::Material*> body_materials,
+                       contact::InterfaceModel model, const ElectricalSettings& settings)
+    : impl_(std::make_unique<Impl>(mesh, std::move(body_materials), std::move(model), settings)) {}
+
+Electrical::~Electrical() = default;
+
+int Electrical::n_gauss() const { return impl_->settings.n_gauss; }
+
+const ElectricalSolution& Electrical::solve(const std::vector<fem::Point>& positions,
+                                            const Eigen::VectorXd& nodal_temperature, double current,
+                                            const contact::ContactState& contact,
+                                            const contact::BondingState& bonding) {
+  Impl& m = *impl_;
+  const fem::Mesh& mesh = m.mesh;
+  if (static_cast<int>(positions.size()) != mesh.n_nodes() || nodal_temperature.size() != mesh.n_nodes())
+    throw std::invalid_argument("Electrical: positions and temperatures must have one entry per node");
+  m.check_contact(contact);
+  m.update_geometry(positions);
+  m.temperature = &nodal_temperature;
+  m.contact = &contact;
+  ElectricalSolution& sol = solution_;
+  m.interface_conductances(bonding, sol.interface_conductance);
+  m.check_current_path(sol.interface_conductance);
+
+  // Unit current: the load 1 A on the voltage dof.
+  fem::Assembler::Terms terms;
+  terms.cells = [&m](int e, fem::LocalSystem& l) { m.cell_kernel(e, l); };
+  terms.groups = [&m, &sol](int g, fem::LocalSystem& l) { m.group_kernel(g, sol.interface_conductance, l); };
+  m.assembler->assemble(terms, m.K, m.F);
+  Eigen::VectorXd load = Eigen::VectorXd::Zero(m.dofs.n_dofs());
+  load[m.voltage_dof] = 1.0;
+  m.F += m.constraints.condense(load);
+  const Eigen::VectorXd unit = m.constraints.distribute(m.solver.solve(m.K, m.F));
+
+  sol.current = current;
+  sol.resistance = unit[m.voltage_dof];
+  sol.voltage = current * sol.resistance;
+  sol.potential = current * unit.head(mesh.n_nodes());
+  const Eigen::VectorXd& phi = sol.potential;
+
+  // Bulk Joule heat σ|∇φ|² at the Gauss points of the assembly.
+  const int n_q = m.n_q;
+  sol.joule_heat.assign(static_cast<std::size_t>(mesh.n_cells()) * n_q, 0.0);
+  sol.bulk_power = 0;
+  for (int e = 0; e < mesh.n_cells(); ++e) {
+    const auto& c = mesh.cells[e];
+    for (int q = 0; q < n_q; ++q) {
+      const std::size_t k = static_cast<std::size_t>(e) * n_q + q;
+      Eigen::Vector2d g = Eigen::Vector2d::Zero();
+      for (int a = 0; a < 4; ++a) g += phi[c[a]] * m.grad[4 * k + a];
+      sol.joule_heat[k] = m.sigma[k] * g.squaredNorm();
+      sol.bulk_power += sol.joule_heat[k] * m.JxW[k];
+    }
+  }
+
+  // Interfaces: current slave → master and Joule heat h_e Δφ².
+  const std::size_t n_interfaces = m.pairings.size();
+  sol.interface_heat.resize(n_interfaces);
+  sol.interface_current.assign(n_interfaces, 0.0);
+  sol.interface_power.assign(n_interfaces, 0.0);
+  for (std::size_t p = 0; p < n_interfaces; ++p) {
+    const auto& points = (*contact.pairings)[p].points();
+    sol.interface_heat[p].assign(points.size(), 0.0);
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const double h = sol.interface_conductance[p][i];
+      if (h == 0) continue;
+      const auto& pt = points[i];
+      const double jump = pt.slave_weights[0] * phi[pt.slave_nodes[0]] + pt.slave_weights[1] * phi[pt.slave_nodes[1]] -
+                          pt.master_weights[0] * phi[pt.master_nodes[0]] -
+                          pt.master_weights[1] * phi[pt.master_nodes[1]];
+      sol.interface_heat[p][i] = contact::interface_joule_heat(h, jump).value;
+      sol.interface_current[p] += h * jump * pt.area;
+      sol.interface_power[p] += sol.interface_heat[p][i] * pt.area;
+    }
+  }
+
+  // Current leaving through the ground face: −∫ σ ∇φ·∇w dV (consistent reaction).
+  double reaction = 0;
+  for (int e : m.ground_cells) {
+    const auto& c = mesh.cells[e];
+    for (int q = 0; q < n_q; ++q) {
+      const std::size_t k = static_cast<std::size_t>(e) * n_q + q;
+      Eigen::Vector2d gphi = Eigen::Vector2d::Zero(), gw = Eigen::Vector2d::Zero();
+      for (int a = 0; a < 4; ++a) {
+        gphi += phi[c[a]] * m.grad[4 * k + a];
+        gw += m.ground_weight[c[a]] * m.grad[4 * k + a];
+      }
+      reaction += m.sigma[k] * gphi.dot(gw) * m.JxW[k];
+    }
+  }
+  sol.ground_current = -reaction;
+
+  sol.probe_voltage.clear();
+  sol.probe_resistance.clear();
+  for (const auto& probe : m.probes) {
+    const double unit_drop = interpolate(mesh, probe[0], unit) - interpolate(mesh, probe[1], unit);
+    sol.probe_voltage.push_back(current * unit_drop);
+    sol.probe_resistance.push_back(unit_drop);
+  }
+  return sol;
+}
+
+std::vector<double> Electrical::cell_joule_heat() const {
+  const Impl& m = *impl_;
+  std::vector<double> out(m.mesh.n_cells(), 0.0);
+  if (solution_.joule_heat.empty()) return out;
+  for (int e = 0; e < m.mesh.n_cells(); ++e) {
+    double volume = 0;
+    for (int q = 0; q < m.n_q; ++q) {
+      const std::size_t k = static_cast<std::size_t>(e) * m.n_q + q;
+      out[e] += solution_.joule_heat[k] * m.JxW[k];
+      volume += m.JxW[k];
+    }
+    out[e] /= volume;
+  }
+  return out;
+}
+
+std::vector<Eigen::Vector2d> Electrical::cell_current_density() const {
+  const Impl& m = *impl_;
+  std::vector<Eigen::Vector2d> out(m.mesh.n_cells(), Eigen::Vector2d::Zero());
+  if (solution_.potential.size() == 0) return out;
+  const Eigen::VectorXd& phi = solution_.potential;
+  for (int e = 0; e < m.mesh.n_cells(); ++e) {
+    const auto& c = m.mesh.cells[e];
+    double volume = 0;
+    for (int q = 0; q < m.n_q; ++q) {
+      const std::size_t k = static_cast<std::size_t>(e) * m.n_q + q;
+      Eigen::Vector2d g = Eigen::Vector2d::Zero();
+      for (int a = 0; a < 4; ++a) g += phi[c[a]] * m.grad[4 * k + a];
+      out[e] -= m.sigma[k] * g * m.JxW[k];
+      volume += m.JxW[k];
+    }
+    out[e] /= volume;
+  }
+  return out;
+}
+
+contact::ContactState contact_state(const Mechanics& mechanics) {
+  contact::ContactState state;
+  state.pairings = &mechanics.pairings();
+  for (std::size_t p = 0; p < mechanics.pairings().size(); ++p)
+    state.pressure.push_back(mechanics.contact_pressure(static_cast<int>(p)));
+  return state;
+}
+
+contact::InterfaceModel interface_model(const fem::Mesh& mesh, const ContactParameters& parameters) {
+  contact::InterfaceModel model;
+  model.thermal = {parameters.htc_p2, parameters.htc_p3, parameters.htc_p4};
+  for (const auto& [name, pair] : mesh.interfaces) {
+    contact::InterfaceProperties props;
+    props.name = name;
+    const InterfaceContact* source = nullptr;
+    if (name.rfind("es_", 0) == 0) {
+      source = &parameters.electrode_sheet;
+    } else if (name.rfind("ss_", 0) == 0) {
+      source = &parameters.sheet_sheet;
+      props.bonding = true;
+    } else {
+      throw std::invalid_argument("interface '" + name +
+                                  "' is neither electrode/sheet ('es_*') nor sheet/sheet ('ss_*')");
+    }
+    props.film_thickness = source->film_thickness;
+    props.coating_resistivity = source->coating_resistivity;
+    props.htc_p1 = source->htc_p1;
+    model.interfaces.push_back(props);
+  }
+  return model;
+}
+
+}  // namespace rsw::physics

@@ -1,0 +1,625 @@
+// Transient heat conduction in enthalpy form with contact interfaces; see thermal.hpp.
+#include "physics/thermal.hpp"
+
+#include "fem/assembler.hpp"
+#include "fem/constraints.hpp"
+#include "fem/dof_map.hpp"
+#include "fem/fe_values.hpp"
+#include "fem/linear_solver.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <stdexcept>
+
+namespace rsw::physics {
+
+namespace {
+using Matrix4 = Eigen::Matrix<double, 4, 4>;
+using Vector4 = Eigen::Matrix<double, 4, 1>;
+
+bool ends_with(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+}  // namespace
+
+ThermalSettings thermal_settings(const ThermalParameters& p) {
+  ThermalSettings s;
+  s.initial_temperature = p.initial_temperature;
+  s.water_htc = p.water_htc;
+  s.water_temperature = p.water_temperature;
+  s.air_htc = p.air_htc;
+  s.ambient_temperature = p.ambient_temperature;
+  s.melt_conductivity = p.melt_conductivity;
+  return s;
+}
+
+struct Thermal::Impl {
+  const fem::Mesh& mesh;
+  fem::Mesh current;  // configuration of the last solve
+  ThermalSettings settings;
+  contact::InterfaceModel model;
+  std::vector<const materials::Material*> body_material;
+  std::vector<const materials::Material*> cell_material;
+  std::vector<char> melt_switch_cell;  // the cell's body switches to λ_m
+  std::vector<const materials::Material*> node_material;
+  int n_q;
+
+  fem::DofMap dofs;
+  fem::Constraints constraints;
+  std::vector<contact::InterfacePairing> pairings;  // the coupling pattern
+  std::vector<std::vector<double>> face_length;
+  std::vector<std::pair<int, int>> groups;
+  std::unique_ptr<fem::Assembler> assembler;
+  fem::LinearSolver solver;
+  fem::SparseMatrix K;
+  Eigen::VectorXd F;
+
+  std::vector<double> cell_mass;  // ∫ ρ_0 N_a dV_0 per cell and local node, kg
+  Eigen::VectorXd nodal_mass;     // kg
+  std::vector<fem::BoundaryFace> water_faces, air_faces;
+  Eigen::VectorXd fixed_weight;   // 1 on fixed-temperature nodes, hanging nodes interpolated
+
+  // State.
+  Eigen::VectorXd T, T_old, peak;      // °C
+  Eigen::VectorXd T_previous;          // °C, the committed field before T_old
+  double previous_dt = 0;              // s, the step that led to T_old (0: none)
+  Eigen::VectorXd H, dH, H_old;        // J/kg and J/(kg K), nodal
+  std::vector<char> melt_state;        // per cell Gauss point: T ≥ T_melting (sharp switch)
+  bool sharp_switch = false;           // some cell switches to λ_m without a blend band
+  bool update_switch = false;
+  bool new_step = true;
+  contact::BondingState bonding, trial_bonding;
+  std::vector<std::vector<double>> conductance;  // per pairing point, last evaluation
+  std::vector<double> JxW;                       // per cell Gauss point, current configuration
+  std::vector<Eigen::Vector2d> grad;             // ∇N_a per cell Gauss point
+  std::vector<std::array<double, 4>> shape;      // N_a at the reference Gauss points
+  bool geometry_valid = false;
+  bool need_matrix = true;                       // kernels compute ∂R/∂T too
+  bool factorized = false;                       // the solver holds a factorisation of this step
+  ThermalEnergy energy;
+
+  // Inputs of the current solve.
+  double dt = 0;
+  const contact::ContactState* contact = nullptr;
+  const std::vector<double>* joule = nullptr;
+  const std::vector<std::vector<double>>* interface_heat = nullptr;
+
+  Impl(const fem::Mesh& m, std::vector<const materials::Material*> materials_of_body, contact::InterfaceModel mdl,
+       const ThermalSettings& s)
+      : mesh(m),
+        current(m),
+        settings(s),
+        model(std::move(mdl)),
+        body_material(std::move(materials_of_body)),
+        n_q(s.n_gauss * s.n_gauss),
+        dofs(m, 1),
+        constraints(dofs.n_dofs()),
+        solver(s.exact_tangent ? fem::SolverKind::klu : fem::SolverKind::cholmod) {
+    if (std::getenv("RSW_VERBOSE")) settings.verbose = true;
+    if (s.n_gauss < 1 || s.n_gauss > 3) throw std::invalid_argument("Thermal: n_gauss must be 1, 2 or 3");
+    if (static_cast<int>(body_material.size()) != mesh.n_bodies())
+      throw std::invalid_argument("Thermal: one material per body expected");
+    if (model.interfaces.size() != mesh.interfaces.size())
+      throw std::invalid_argument("Thermal: the interface model must list every mesh interface");
+    for (int e = 0; e < mesh.n_cells(); ++e) {
+      const int b = mesh.cell_body[e];
+      cell_material.push_back(body_material[b]);
+      melt_switch_cell.push_back(s.melt_conductivity > 0 && mesh.body_names[b].rfind(s.melt_conductivity_prefix, 0) == 0);
+    }
+    for (int n = 0; n < mesh.n_nodes(); ++n) node_material.push_back(body_material[mesh.node_body[n]]);
+    sharp_switch = s.melt_smoothing <= 0 && std::find(melt_switch_cell.begin(), melt_switch_cell.end(), 1) != melt_switch_cell.end();
+
+    constraints.add_hanging_nodes(mesh, dofs);
+    for (const auto& [name, value] : s.fixed_temperatures) {
+      const double v = value;
+      constraints.constrain_boundary(mesh, dofs, name, 0, [v](const fem::Point&) { return v; });
+    }
+    constraints.close();
+
+    std::vector<std::vector<int>> dof_groups;
+    std::size_t k = 0;
+    for (const auto& [name, pair] : mesh.interfaces) {
+      if (model.interfaces[k++].name != name)
+        throw std::invalid_argument("Thermal: interface model out of order at '" + name + "'");
+      pairings.emplace_back(mesh, name, s.n_gauss, s.search_margin);
+      const auto& pairing = pairings.back();
+      face_length.push_back(contact::slave_face_lengths(mesh, pairing));
+      const int p = static_cast<int>(pairings.size()) - 1;
+      for (int f = 0; f < pairing.n_slave_faces(); ++f) {
+        groups.emplace_back(p, f);
+        std::vector<int> g;
+        for (int n : pairing.coupling_nodes(f)) g.push_back(dofs.dof(n, 0));
+        dof_groups.push_back(std::move(g));
+      }
+      conductance.emplace_back(pairing.points().size(), 0.0);
+    }
+    assembler = std::make_unique<fem::Assembler>(mesh, dofs, constraints, dof_groups);
+    bonding = contact::BondingState(pairings);
+    trial_bonding = bonding;
+
+    // Lumped capacity on the undeformed mesh: M_a = ∫ ρ_0 N_a dV_0.
+    cell_mass.assign(4 * static_cast<std::size_t>(mesh.n_cells()), 0.0);
+    nodal_mass = Eigen::VectorXd::Zero(mesh.n_nodes());
+    fem::CellValues cv(s.n_gauss);
+    for (int e = 0; e < mesh.n_cells(); ++e) {
+      cv.reinit(mesh, e);
+      const double rho0 = cell_material[e]->density(materials::reference_temperature).value;
+      for (int q = 0; q < cv.n_q(); ++q)
+        for (int a = 0; a < 4; ++a) cell_mass[4 * e + a] += rho0 * cv.N(q, a) * cv.JxW(q);
+      for (int a = 0; a < 4; ++a) nodal_mass[mesh.cells[e][a]] += cell_mass[4 * e + a];
+    }
+
+    // Convection boundaries.
+    std::vector<std::string> fixed;
+    for (const auto& fx : s.fixed_temperatures) fixed.push_back(fx.first);
+    for (const auto& [name, faces] : mesh.boundaries) {
+      if (std::find(fixed.begin(), fixed.end(), name) != fixed.end()) continue;
+      bool adiabatic = false;
+      for (const auto& suffix : s.adiabatic_suffixes) adiabatic = adiabatic || ends_with(name, suffix);
+      if (adiabatic) continue;
+      auto& target = ends_with(name, s.water_suffix) ? water_faces : air_faces;
+      target.insert(target.end(), faces.begin(), faces.end());
+    }
+    fixed_weight = Eigen::VectorXd::Zero(mesh.n_nodes());
+    for (const auto& name : fixed)
+      for (int n : mesh.boundary_nodes(name)) fixed_weight[n] = 1.0;
+    for (const auto& h : mesh.hanging_nodes)
+      fixed_weight[h.node] = 0.5 * (fixed_weight[h.parents[0]] + fixed_weight[h.parents[1]]);
+
+    melt_state.assign(static_cast<std::size_t>(mesh.n_cells()) * n_q, 0);
+    JxW.assign(melt_state.size(), 0.0);
+    grad.assign(4 * melt_state.size(), Eigen::Vector2d::Zero());
+    for (int q = 0; q < n_q; ++q) shape.push_back({cv.N(q, 0), cv.N(q, 1), cv.N(q, 2), cv.N(q, 3)});
+    set_temperature(Eigen::VectorXd::Constant(mesh.n_nodes(), s.initial_temperature));
+  }
+
+  void set_temperature(const Eigen::VectorXd& field) {
+    T_old = field;
+    T_previous = field;
+    previous_dt = 0;
+    T = field;
+    peak = field;
+    H_old.resize(mesh.n_nodes());
+    for (int n = 0; n < mesh.n_nodes(); ++n) H_old[n] = node_material[n]->enthalpy(T_old[n]).value;
+    new_step = true;
+  }
+
+  void check_inputs(const contact::ContactState& state, const std::vector<double>& q_v,
+                    const std::vector<std::vector<double>>& q_s) const {
+    if (!state.pairings || state.pairings->size() != pairings.size() || state.pressure.size() != pairings.size())
+      throw std::invalid_argument("Thermal: the contact state must hold one pairing and one pressure list per interface");
+    for (std::size_t p = 0; p < pairings.size(); ++p) {
+      const auto& given = (*state.pairings)[p];
+      const auto& own = pairings[p];
+      bool same = given.name() == own.name() && given.n_gauss() == own.n_gauss() &&
+                  given.n_slave_faces() == own.n_slave_faces() && state.pressure[p].size() == given.points().size();
+      for (int f = 0; same && f < own.n_slave_faces(); ++f) same = given.coupling_nodes(f) == own.coupling_nodes(f);
+      if (!same)
+        throw std::invalid_argument("Thermal: pairing '" + own.name() +
+                                    "' of the contact state differs from the solver's (n_gauss, search margin?)");
+      if (!q_s.empty() && q_s[p].size() != given.points().size())
+        throw std::invalid_argument("Thermal: interface heat of '" + own.name() + "' has the wrong size");
+    }
+    if (!q_v.empty() && q_v.size() != melt_state.size())
+      throw std::invalid_argument("Thermal: bulk Joule heat must have one value per cell Gauss point");
+    if (!q_s.empty() && q_s.size() != pairings.size())
+      throw std::invalid_argument("Thermal: interface heat must have one list per interface");
+  }
+
+  // k(T) with the λ_m switch of paper eq. 3, and dk/dT.
+  materials::PropertyValue conductivity(int e, int q, double temperature) {
+    const materials::Material& mat = *cell_material[e];
+    const materials::PropertyValue table = mat.thermal_conductivity(temperature);
+    if (!melt_switch_cell[e]) return table;
+    const double lambda_m = settings.melt_conductivity;
+    const double T_m = mat.melting_temperature();
+    if (settings.melt_smoothing > 0) {
+      const materials::PropertyValue w = materials::smoothstep(temperature, T_m - settings.melt_smoothing, T_m);
+      return {(1 - w.value) * table.value + w.value * lambda_m,
+              (1 - w.value) * table.slope + w.slope * (lambda_m - table.value)};
+    }
+    char& state = melt_state[static_cast<std::size_t>(e) * n_q + q];
+    if (update_switch) state = temperature >= T_m;
+    return state ? materials::PropertyValue{lambda_m, 0.0} : table;
+  }
+
+  // Gauss-point geometry (∇N, JxW) of every cell for the node positions; kept while
+  // the positions do not change (the coupling iterations of one step).
+  void update_geometry(const std::vector<fem::Point>& positions) {
+    if (geometry_valid && positions == current.nodes) return;
+    current.nodes = positions;
+    fem::CellValues cv(settings.n_gauss);
+    for (int e = 0; e < mesh.n_cells(); ++e) {
+      cv.reinit(current, e);
+      for (int q = 0; q < n_q; ++q) {
+        const std::size_t k = static_cast<std::size_t>(e) * n_q + q;
+        JxW[k] = cv.JxW(q);
+        for (int a = 0; a < 4; ++a) grad[4 * k + a] = cv.grad_N(q, a);
+      }
+    }
+    geometry_valid = true;
+  }
+
+  // Capacity, conduction and bulk source of one cell; local.vector = −R_e, matrix = ∂R_e/∂T.
+  void cell_kernel(int e, fem::LocalSystem& local) {
+    const auto& c = mesh.cells[e];
+    Matrix4 Ke = Matrix4::Zero();
+    Vector4 Re = Vector4::Zero();
+    Vector4 Tc;
+    for (int a = 0; a < 4; ++a) {
+      const int n = c[a];
+      Tc[a] = T[n];
+      const double m = cell_mass[4 * e + a];
+      Re[a] += m * (H[n] - H_old[n]) / dt;  // M_a (H(T_a) − H(T_a^n))/Δt
+      Ke(a, a) += m * dH[n] / dt;           // M_a H'(T_a)/Δt
+    }
+    const bool matrix = need_matrix;
+    for (int q = 0; q < n_q; ++q) {
+      const std::size_t k = static_cast<std::size_t>(e) * n_q + q;
+      const Eigen::Vector2d* g = &grad[4 * k];
+      const std::array<double, 4>& N = shape[q];
+      double Tq = 0;
+      Eigen::Vector2d grad_T = Eigen::Vector2d::Zero();
+      for (int a = 0; a < 4; ++a) {
+        Tq += N[a] * Tc[a];
+        grad_T += Tc[a] * g[a];
+      }
+      const materials::PropertyValue kq = conductivity(e, q, Tq);
+      const double k_slope = settings.exact_tangent ? kq.slope : 0.0;
+      const double q_v = joule->empty() ? 0.0 : (*joule)[k];
+      const double w = JxW[k];
+      for (int a = 0; a < 4; ++a) {
+        const double flux_a = grad_T.dot(g[a]);
+        Re[a] += (kq.value * flux_a - q_v * N[a]) * w;  // k ∇T·∇N_a − q_v N_a
+        if (matrix)
+          for (int b = 0; b < 4; ++b)                    // k ∇N_b·∇N_a + k' N_b ∇T·∇N_a
+            Ke(a, b) += (kq.value * g[b].dot(g[a]) + k_slope * N[b] * flux_a) * w;
+      }
+    }
+    local.matrix += Ke;
+    local.vector -= Re;
+  }
+
+  // Convection h (T − T_∞) on a boundary face.
+  void face_kernel(const fem::BoundaryFace& f, double h, double T_inf, fem::LocalSystem& local, double* heat) {
+    thread_local std::unique_ptr<fem::FaceValues> scratch;
+    if (!scratch || scratch->n_q() != settings.n_gauss) scratch = std::make_unique<fem::FaceValues>(settings.n_gauss);
+    fem::FaceValues& fv = *scratch;
+    fv.reinit(current, f.cell, f.face);
+    const auto& c = mesh.cells[f.cell];
+    for (int q = 0; q < fv.n_q(); ++q) {
+      double Tq = 0;
+      for (int a = 0; a < 4; ++a) Tq += fv.N(q, a) * T[c[a]];
+      const double w = fv.JxW(q);
+      if (heat) *heat += h * (Tq - T_inf) * w;
+      for (int a = 0; a < 4; ++a) {
+        local.vector[a] -= h * (Tq - T_inf) * fv.N(q, a) * w;
+        for (int b = 0; b < 4; ++b) local.matrix(a, b) += h * fv.N(q, a) * fv.N(q, b) * w;
+      }
+    }
+  }
+
+  // Conductance h of every pairing point (HTC·χ, or bonded; 0 where unpaired or
+  // outside the coupling pattern) at the current T. The solve evaluates it once, at
+  // the temperature it starts from: h depends steeply on T near the solidus (σ_d
+  // falls to the strength floor) and the table kinks of σ_d and k would make Newton
+  // cycle; like σ(T) of the electrical field it is updated by the staggered coupling.
+  void interface_conductances() {
+    for (std::size_t p = 0; p < pairings.size(); ++p) {
+      const auto& pairing = (*contact->pairings)[p];
+      const auto& props = model.interfaces[p];
+      for (std::size_t i = 0; i < pairing.points().size(); ++i) {
+        const auto& pt = pairing.points()[i];
+        double& h = conductance[p][i];
+        h = 0;
+        if (!pt.paired || pairing.local_index(pt.slave_face, pt.master_nodes[0]) < 0 ||
+            pairing.local_index(pt.slave_face, pt.master_nodes[1]) < 0)
+          continue;
+        const double T_s = pt.slave_weights[0] * T[pt.slave_nodes[0]] + pt.slave_weights[1] * T[pt.slave_nodes[1]];
+        const double T_m = pt.master_weights[0] * T[pt.master_nodes[0]] + pt.master_weights[1] * T[pt.master_nodes[1]];
+        const double T_i = 0.5 * (T_s + T_m);
+        const materials::Material& mat_s = *node_material[pt.slave_nodes[0]];
+        const materials::Material& mat_m = *node_material[pt.master_nodes[0]];
+        if (props.bonding && bonding.bonded(static_cast<int>(p), static_cast<int>(i))) {
+          h = contact::bonded_thermal_conductance(mat_s, mat_m, T_i, face_length[p][pt.slave_face], model.bonded_factor)
+                  .value;
+        } else {
+          const double chi = contact::closure_factor(pt.gap, model.closure_gap).value;
+          if (chi > 0)
+            h = chi * contact::thermal_contact_conductance(mat_s, mat_m, contact->pressure[p][i], T_i, props,
+                                                           model.thermal)
+                          .value;
+        }
+      }
+    }
+  }
+
+  // Thermal contact and interface heat at the points of one slave face:
+  // R += h (T_s − T_m)(v_s − v_m) A − q_s (v_s + v_m)/2 A.
+  void group_kernel(int g, fem::LocalSystem& local, double* interface_power) {
+    const auto [p, f] = groups[g];
+    const auto& pairing = (*contact->pairings)[p];
+    const int n_local = static_cast<int>(local.vector.size());
+    Eigen::VectorXd jump(n_local), mean(n_local);
+    for (int k = 0; k < pairing.n_gauss(); ++k) {
+      const int i = f * pairing.n_gauss() + k;
+      const auto& pt = pairing.points()[i];
+      const double h = conductance[p][i];
+      const double q_s = interface_heat->empty() ? 0.0 : (*interface_heat)[p][i];
+      if (!pt.paired || (h == 0 && q_s == 0)) continue;
+      const int lm0 = pairing.local_index(f, pt.master_nodes[0]), lm1 = pairing.local_index(f, pt.master_nodes[1]);
+      if (lm0 < 0 || lm1 < 0) continue;  // outside the pattern: no coupling
+      jump.setZero();
+      mean.setZero();
+      for (int s = 0; s < 2; ++s) {
+        const int ls = pairing.local_index(f, pt.slave_nodes[s]);
+        const int lm = s == 0 ? lm0 : lm1;
+        jump[ls] += pt.slave_weights[s];
+        jump[lm] -= pt.master_weights[s];
+        mean[ls] += 0.5 * pt.slave_weights[s];  // the half/half split of q_s
+        mean[lm] += 0.5 * pt.master_weights[s];
+      }
+      const double T_s = pt.slave_weights[0] * T[pt.slave_nodes[0]] + pt.slave_weights[1] * T[pt.slave_nodes[1]];
+      const double T_m = pt.master_weights[0] * T[pt.master_nodes[0]] + pt.master_weights[1] * T[pt.master_nodes[1]];
+      const double A = pt.area;
+      local.vector.noalias() -= h * (T_s - T_m) * A * jump - q_s * A * mean;
+      local.matrix.noalias() += h * A * jump * jump.transpose();
+      if (interface_power) *interface_power += q_s * A;
+    }
+  }
+
+  void nodal_enthalpy() {
+    H.resize(mesh.n_nodes());
+    dH.resize(mesh.n_nodes());
+    for (int n = 0; n < mesh.n_nodes(); ++n) {
+      const materials::PropertyValue h = node_material[n]->enthalpy(T[n]);
+      H[n] = h.value;
+      dH[n] = h.slope;
+    }
+  }
+
+  fem::Assembler::Terms terms() {
+    fem::Assembler::Terms t;
+    t.cells = [this](int e, fem::LocalSystem& l) { cell_kernel(e, l); };
+    const double h_w = settings.water_htc, T_w = settings.water_temperature;
+    const double h_a = settings.air_htc, T_a = settings.ambient_temperature;
+    if (h_w != 0 && !water_faces.empty())
+      t.faces.push_back({&water_faces, [this, h_w, T_w](const fem::BoundaryFace& f, fem::LocalSystem& l) {
+                           face_kernel(f, h_w, T_w, l, nullptr);
+                         }});
+    if (h_a != 0 && !air_faces.empty())
+      t.faces.push_back({&air_faces, [this, h_a, T_a](const fem::BoundaryFace& f, fem::LocalSystem& l) {
+                           face_kernel(f, h_a, T_a, l, nullptr);
+                         }});
+    if (!groups.empty()) t.groups = [this](int g, fem::LocalSystem& l) { group_kernel(g, l, nullptr); };
+    return t;
+  }
+
+  // −R and ∂R/∂T of the reduced system at the current T.
+  // −R (and ∂R/∂T if `matrix`) of the reduced system at the current T.
+  void evaluate(bool matrix) {
+    need_matrix = matrix;
+    nodal_enthalpy();
+    assembler->assemble(terms(), K, F, /*homogeneous=*/true, matrix);
+    need_matrix = true;
+  }
+
+  // Energy of the step at the converged T.
+  void account() {
+    energy = ThermalEnergy{};
+    for (int n = 0; n < mesh.n_nodes(); ++n) energy.stored += nodal_mass[n] * (H[n] - H_old[n]);
+    if (!joule->empty())
+      for (std::size_t k = 0; k < JxW.size(); ++k) energy.generated_bulk += (*joule)[k] * JxW[k] * dt;
+    fem::LocalSystem scratch;
+    const auto boundary_heat = [&](const std::vector<fem::BoundaryFace>& faces, double h, double T_inf) {
+      double heat = 0;
+      for (const auto& f : faces) {
+        scratch.matrix.setZero(4, 4);
+        scratch.vector.setZero(4);
+        face_kernel(f, h, T_inf, scratch, &heat);
+      }
+      return heat * dt;
+    };
+    energy.removed_water = boundary_heat(water_faces, settings.water_htc, settings.water_temperature);
+    energy.removed_air = boundary_heat(air_faces, settings.air_htc, settings.ambient_temperature);
+    double interface_power = 0;
+    for (std::size_t g = 0; g < groups.size(); ++g) {
+      const int n = static_cast<int>(pairings[groups[g].first].coupling_nodes(groups[g].second).size());
+      scratch.matrix.setZero(n, n);
+      scratch.vector.setZero(n);
+      group_kernel(static_cast<int>(g), scratch, &interface_power);
+    }
+    energy.generated_interface = interface_power * dt;
+    if (!settings.fixed_temperatures.empty()) energy.removed_fixed = -fixed_reaction() * dt;
+  }
+
+  // Heat per unit time supplied through the fixed-temperature boundaries: Σ_a w_a R_a
+  // over the full (unconstrained) residual rows, w = 1 on fixed nodes.
+  double fixed_reaction() {
+    Eigen::VectorXd R = Eigen::VectorXd::Zero(mesh.n_nodes());
+    fem::LocalSystem l;
+    const fem::Assembler::Terms t = terms();
+    for (int e = 0; e < mesh.n_cells(); ++e) {
+      l.matrix.setZero(4, 4);
+      l.vector.setZero(4);
+      t.cells(e, l);
+      for (int a = 0; a < 4; ++a) R[mesh.cells[e][a]] -= l.vector[a];
+    }
+    for (const auto& term : t.faces)
+      for (const auto& f : *term.faces) {
+        l.matrix.setZero(4, 4);
+        l.vector.setZero(4);
+        term.kernel(f, l);
+        for (int a = 0; a < 4; ++a) R[mesh.cells[f.cell][a]] -= l.vector[a];
+      }
+    for (std::size_t g = 0; g < groups.size(); ++g) {
+      const auto& nodes = pairings[groups[g].first].coupling_nodes(groups[g].second);
+      const int n = static_cast<int>(nodes.size());
+      l.matrix.setZero(n, n);
+      l.vector.setZero(n);
+      t.groups(static_cast<int>(g), l);
+      for (int a = 0; a < n; ++a) R[nodes[a]] -= l.vector[a];
+    }
+    return fixed_weight.dot(R);
+  }
+
+  void update_bonding() {
+    trial_bonding = bonding;
+    for (std::size_t p = 0; p < pairings.size(); ++p) {
+      if (!model.interfaces[p].bonding) continue;
+      const auto& points = (*contact->pairings)[p].points();
+      for (std::size_t i = 0; i < points.size(); ++i) {
+        const auto& pt = points[i];
+        if (!pt.paired || trial_bonding.bonded(static_cast<int>(p), static_cast<int>(i))) continue;
+        const double T_s = pt.slave_weights[0] * T[pt.slave_nodes[0]] + pt.slave_weights[1] * T[pt.slave_nodes[1]];
+        const double T_m = pt.master_weights[0] * T[pt.master_nodes[0]] + pt.master_weights[1] * T[pt.master_nodes[1]];
+        if (contact::bonds(T_s, node_material[pt.slave_nodes[0]]->solidus(), T_m,
+                           node_material[pt.master_nodes[0]]->solidus()))
+          trial_bonding.bond(static_cast<int>(p), static_cast<int>(i));
+      }
+    }
+  }
+};
+
+Thermal::Thermal(const fem::Mesh& mesh, std::vector<const materials::Material*> body_materials,
+                 contact::InterfaceModel model, const ThermalSettings& settings)
+    : impl_(std::make_unique<Impl>(mesh, std::move(body_materials), std::move(model), settings)) {}
+
+Thermal::~Thermal() = default;
+
+void Thermal::set_temperature(const Eigen::VectorXd& nodal_temperature) {
+  if (nodal_temperature.size() != impl_->mesh.n_nodes())
+    throw std::invalid_argument("Thermal: one temperature per node expected");
+  impl_->set_temperature(nodal_temperature);
+}
+
+ThermalStepReport Thermal::solve(double dt, const std::vector<fem::Point>& positions,
+                                 const contact::ContactState& contact, const std::vector<double>& joule_heat,
+                                 const std::vector<std::vector<double>>& interface_heat) {
+  Impl& m = *impl_;
+  if (!(dt > 0)) throw std::invalid_argument("Thermal: the time step must be positive");
+  if (static_cast<int>(positions.size()) != m.mesh.n_nodes())
+    throw std::invalid_argument("Thermal: one position per node expected");
+  m.check_inputs(contact, joule_heat, interface_heat);
+  m.update_geometry(positions);
+  m.dt = dt;
+  m.contact = &contact;
+  m.joule = &joule_heat;
+  m.interface_heat = &interface_heat;
+  // A new step factorises afresh; further calls of the step (staggered coupling)
+  // start from the step's last factorisation.
+  bool refactor = m.new_step || !m.factorized;
+  if (m.new_step) {
+    m.T = m.T_old;
+    // Predictor: linear extrapolation of the last two committed fields.
+    if (m.settings.extrapolate && m.previous_dt > 0) m.T += (m.T_old - m.T_previous) * (dt / m.previous_dt);
+  }
+  // Fixed values and hanging nodes exactly satisfied; Newton corrections keep them.
+  m.T = m.constraints.distribute(m.constraints.restrict_to_free(m.T));
+  m.new_step = false;
+
+  ThermalStepReport report;
+  const double tolerance = m.settings.temperature_tolerance;
+  m.interface_conductances();
+  m.update_switch = m.sharp_switch;  // λ_m switch states at the starting iterate
+  m.evaluate(refactor);
+  m.update_switch = m.sharp_switch && m.settings.switch_iterations > 0;
+  std::vector<char> previous_states;
+  double previous_norm = 0;
+  for (int it = 1; it <= m.settings.max_iterations; ++it) {
+    report.iterations = it;
+    Eigen::VectorXd step;
+    try {
+      if (refactor) {
+        m.solver.factorize(m.K);
+        m.factorized = true;
+        ++report.factorizations;
+      }
+      step = m.constraints.distribute(m.solver.solve(m.F), /*homogeneous=*/true);
+    } catch (const std::exception& e) {
+      report.message = std::string("linear solve failed: ") + e.what();
+      m.factorized = false;
+      return report;
+    }
+    const double step_norm = step.lpNorm<Eigen::Infinity>();
+    // Chord steps (the last factorisation) while the corrections are below
+    // chord_threshold and shrink at least fourfold per iteration; else refactorise.
+    // The tangent is assembled only when it will be factorised.
+    refactor = step_norm > m.settings.chord_threshold || (it > 1 && step_norm > 0.25 * previous_norm);
+    previous_norm = step_norm;
+    // Backtracking on |R|₂ while the step is large (the S-shaped enthalpy of a narrow
+    // melting range can make full Newton steps cycle); small steps are taken whole.
+    const Eigen::VectorXd base = m.T;
+    const double norm0 = m.F.norm();
+    if (m.update_switch) previous_states = m.melt_state;
+    double alpha = 1.0;
+    for (int ls = 0; ls < 8; ++ls) {
+      m.T = base + alpha * step;
+      m.evaluate(refactor);
+      if (step_norm <= 100 * tolerance || m.F.norm() <= (1 - 1e-4 * alpha) * norm0 || ls == 7) break;
+      alpha *= 0.5;
+    }
+    report.correction = alpha * step_norm;
+    if (alpha < 1 && !refactor) {  // a damped step: refactorise at the accepted point
+      refactor = true;
+      m.evaluate(true);
+    }
+    if (m.settings.verbose) {
+      Eigen::Index worst = 0;
+      step.cwiseAbs().maxCoeff(&worst);
+      std::fprintf(stderr,
+                   "  thermal newton %2d: |dT| = %.3e K at node %d (%.4f, %.4f) mm, T = %.1f degC; alpha = %.3f, "
+                   "|R| = %.3e W, factorisations %d\n",
+                   it, step_norm, static_cast<int>(worst), 1e3 * m.current.nodes[worst].x(),
+                   1e3 * m.current.nodes[worst].y(), m.T[worst], alpha, m.F.lpNorm<Eigen::Infinity>(),
+                   report.factorizations);
+    }
+    // A step that changed switch states leaves a residual the step did not see.
+    const bool switched = m.update_switch && previous_states != m.melt_state;
+    // Freeze the switch states; K and F already belong to the frozen states.
+    if (it >= m.settings.switch_iterations) m.update_switch = false;
+    if (alpha == 1.0 && step_norm <= tolerance && !switched) {
+      report.converged = true;
+      break;
+    }
+  }
+  if (!report.converged)
+    report.message = "Newton did not converge in " + std::to_string(m.settings.max_iterations) +
+                     " iterations (last correction " + std::to_string(report.correction) + " K)";
+  m.update_switch = false;
+  m.account();
+  m.update_bonding();
+  return report;
+}
+
+void Thermal::commit() {
+  Impl& m = *impl_;
+  m.T_previous = m.T_old;
+  m.previous_dt = m.dt;
+  m.T_old = m.T;
+  m.peak = m.peak.cwiseMax(m.T);
+  for (int n = 0; n < m.mesh.n_nodes(); ++n) m.H_old[n] = m.node_material[n]->enthalpy(m.T_old[n]).value;
+  m.bonding = m.trial_bonding;
+  m.new_step = true;
+  m.factorized = false;
+}
+
+const Eigen::VectorXd& Thermal::temperature() const { return impl_->T; }
+const Eigen::VectorXd& Thermal::committed_temperature() const { return impl_->T_old; }
+const Eigen::VectorXd& Thermal::peak_temperature() const { return impl_->peak; }
+
+Eigen::VectorXd Thermal::liquid_fraction() const {
+  const Impl& m = *impl_;
+  Eigen::VectorXd f(m.mesh.n_nodes());
+  for (int n = 0; n < m.mesh.n_nodes(); ++n) f[n] = m.node_material[n]->liquid_fraction(m.T[n]).value;
+  return f;
+}
+
+const ThermalEnergy& Thermal::energy() const { return impl_->energy; }
+const contact::BondingState& Thermal::bonding() const { return impl_->bonding; }
+const std::vector<std::vector<double>>& Thermal::interface_conductance() const { return impl_->conductance; }
+
+}  // namespace rsw::physics

@@ -1,0 +1,182 @@
+// Transient heat conduction in the electrode/sheet stack (MODEL.md §4), backward
+// Euler in enthalpy form, solved by Newton's method:
+//
+//   Σ_a M_a (H(T_a) − H(T_a^n))/Δt v_a + ∫ k(T) ∇T·∇v dV
+//       = ∫ q_v v dV + Σ_points ½ q_s (v_s + v_m) A − Σ_points h (T_s − T_m)(v_s − v_m) A
+//         − ∫_water h_w (T − T_w) v dA − ∫_air h_air (T − T_amb) v dA
+//
+// - H(T): specific enthalpy with latent heat (materials::Material::enthalpy, J/kg),
+//   H' = dH/dT the apparent heat capacity. The capacity term is lumped at the nodes
+//   (row-sum mass M_a = ∫ ρ_0 N_a dV_0 on the undeformed mesh, ρ_0 = density at
+//   20 °C): the body's mass does not change when it deforms, and nodal enthalpy keeps
+//   a narrow melting range monotone (no consistent-mass overshoot ahead of a front).
+//   The Newton tangent carries M_a H'(T_a)/Δt exactly, and the residual uses H
+//   itself, so the latent heat is conserved whatever the step: the energy stored in a
+//   step is Σ_a M_a (H(T_a) − H(T_a^n)).
+// - k(T): the table conductivity; for the sheet bodies (name prefix "sheet_") k = λ_m
+//   at and above T_melting (paper eq. 3, λ_m = thermal.melt_conductivity), switched
+//   per Gauss point. An optional band of width δ below T_melting blends the two C¹
+//   (k = (1 − w) k_table + w λ_m, w = smoothstep(T; T_m − δ, T_m)); δ = 0 (default)
+//   is the paper's switch. A sharp switch makes the residual discontinuous, so the
+//   switch states are taken at the iterate a solve starts from, updated during the
+//   first `switch_iterations` Newton iterations and then frozen: Newton converges on
+//   the frozen (smooth) problem. Repeated solves of one step (staggered coupling)
+//   start from the previous result, so the states settle with the coupling.
+// - Newton: the tangent holds the capacity M_a H'(T_a)/Δt, conduction k ∇N·∇N,
+//   convection and the interface conductances; by default the term of dk/dT is left
+//   out, which keeps it symmetric (CHOLMOD, about half the cost of an unsymmetric
+//   factorisation) at a linear convergence rate of a few per cent for the steel and
+//   copper tables; `exact_tangent` adds it (KLU), recommended with a smoothing band,
+//   whose dk/dT is steep. A backtracking line search on |R| guards the large
+//   corrections (the S-shaped enthalpy of a melting range can make full steps
+//   cycle). Corrections below `chord_threshold` reuse the step's last factorisation
+//   while they shrink fourfold per iteration. The iteration ends when a full
+//   correction is below `temperature_tolerance` (∞-norm). Each step starts from the
+//   linear extrapolation of the last two committed fields.
+// - Conduction, sources and boundary terms live on the current configuration (node
+//   positions passed in), like the electrical field, so the Joule heat integrates to
+//   exactly the electrical power.
+// - Sources: bulk Joule heat q_v (W/m³) at the cell Gauss points and interface Joule
+//   heat q_s (W/m²) at the pairing points, both from physics::Electrical; q_s is
+//   released half on each side, distributed with the side's interpolation weights.
+// - Interfaces: at every paired point the flux h (T_s − T_m) with h = HTC(F_n, T_i)
+//   χ(g) (paper eq. 2 times the C¹ closure factor, contact/interface_laws.hpp), or
+//   the bonded conductance at bonded S/S points (perfect thermal contact). Each solve
+//   evaluates h once, at the temperature it starts from (our choice): h varies
+//   steeply with T near the solidus, where σ_d falls to the strength floor, and the
+//   kinks of the σ_d and k tables make Newton cycle when h(T_i) is implicit. Like
+//   σ(T) of the electrical field, h is brought up to date by the staggered coupling
+//   iterations of a step; the flux stays conservative either way.
+// - Boundaries: water cooling q = h_w (T − T_w) on every "*.cooling_bore"; air
+//   q = h_air (T − T_amb) on every other named outer boundary except the axis
+//   ("*.axis", symmetry) and the electrode end faces ("*.end_face", adiabatic: the
+//   cap continues into its holder there). Sheet and electrode surfaces that are in
+//   contact keep their air term too: with h_air = 20 W/(m²K) it removes about 1 W from
+//   a closed contact of 30 mm² at 1500 °C, against ~10 kW of Joule heat, and it
+//   spares a switch on the contact state. Fixed temperatures on named boundaries are
+//   offered for verification problems.
+// - Initial temperature uniform (settings), or a given field.
+//
+// Outputs: nodal T (last solve), committed T, peak temperature (nodal maximum over
+// the committed steps), liquid fraction, HTC at the pairing points, the bonded state
+// (committed with the step: a S/S point whose two sides are both at or above their
+// solidus after a converged step bonds for good) and the energy of the last step:
+// stored ∫ρ_0 ΔH dV, generated (bulk, interface) and removed (water, air, fixed
+// temperatures, the last as the consistent reaction), so that a driver can check
+// ∫ V I dt = stored + removed.
+//
+// Sources: paper §2.1.2 (eq. 3) and §2.1.1 (eq. 2); MODEL.md §4; enthalpy method after
+// V.R. Voller, C.R. Swaminathan, B.G. Thomas, Int. J. Numer. Meth. Eng. 30 (1990)
+// 875–898 (fixed-grid enthalpy with nodal lumping).
+#pragma once
+
+#include "contact/interface_laws.hpp"
+#include "fem/mesh.hpp"
+#include "materials/material.hpp"
+#include "physics/problem.hpp"
+
+#include <Eigen/Core>
+
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace rsw::physics {
+
+struct ThermalSettings {
+  int n_gauss = 2;                    // per direction; must match the electrical solver's
+  double search_margin = 0.5e-3;      // m, of the pairings (must equal the mechanics')
+  double initial_temperature = 20.0;  // °C
+  double water_htc = 4e4;             // W/(m²K), on "*<water_suffix>"
+  double water_temperature = 20.0;    // °C
+  double air_htc = 20.0;              // W/(m²K), other named outer boundaries
+  double ambient_temperature = 20.0;  // °C
+  std::string water_suffix = ".cooling_bore";
+  std::vector<std::string> adiabatic_suffixes = {".axis", ".end_face"};
+  // Fixed temperatures (°C) on named boundaries (verification problems); these
+  // boundaries get no convection.
+  std::vector<std::pair<std::string, double>> fixed_temperatures;
+  double melt_conductivity = 0.0;     // W/(m·K), λ_m; <= 0 keeps the tables everywhere
+  std::string melt_conductivity_prefix = "sheet_";  // bodies whose k switches to λ_m
+  double melt_smoothing = 0.0;        // K, blend band below T_melting (0: sharp switch)
+  // Newton iterations after the first evaluation that may still change the sharp
+  // switch states (0: the states of the starting iterate are kept for the solve).
+  int switch_iterations = 1;
+  int max_iterations = 40;
+  // K, ∞-norm of a full Newton correction that ends the iteration: the field is then
+  // within ~10⁻⁵ K of the discrete solution (linear rate of a few per cent), and the
+  // energy balance of a weld step closes to ~10⁻⁹ of the step's Joule heat.
+  double temperature_tolerance = 1e-4;
+  // Each step starts from the linear extrapolation of the last two committed fields
+  // (from the committed field if false or at the first step).
+  bool extrapolate = true;
+  // Exact Newton tangent (with the dk/dT term: unsymmetric, KLU) or its symmetric
+  // part only (CHOLMOD; converges linearly where k varies steeply with T).
+  bool exact_tangent = false;
+  // K: Newton corrections below this reuse the last factorisation of the step (chord
+  // steps) as long as they shrink at least fourfold per iteration.
+  double chord_threshold = 1.0;
+  bool verbose = false;  // print Newton iterations to stderr (also RSW_VERBOSE=1)
+};
+
+// The settings of a weld case (initial temperature, cooling, air, λ_m).
+ThermalSettings thermal_settings(const ThermalParameters& parameters);
+
+// Energy of the last solved step, J.
+struct ThermalEnergy {
+  double stored = 0;               // Σ M_a (H(T_a) − H(T_a^n))
+  double generated_bulk = 0;       // Δt ∫ q_v dV
+  double generated_interface = 0;  // Δt Σ q_s A
+  double removed_water = 0;        // Δt ∫ h_w (T − T_w) dA
+  double removed_air = 0;          // Δt ∫ h_air (T − T_amb) dA
+  double removed_fixed = 0;        // Δt · heat leaving through fixed-temperature boundaries
+  double generated() const { return generated_bulk + generated_interface; }
+  double removed() const { return removed_water + removed_air + removed_fixed; }
+  double imbalance() const { return generated() - stored - removed(); }
+};
+
+struct ThermalStepReport {
+  bool converged = false;
+  int iterations = 0;
+  int factorizations = 0;
+  double correction = 0;  // K, ∞-norm of the last Newton correction
+  std::string message;
+};
+
+class Thermal {
+ public:
+  // `body_materials[b]` is the material of mesh body b; `model` holds one entry per
+  // mesh interface, in mesh.interfaces order.
+  Thermal(const fem::Mesh& mesh, std::vector<const materials::Material*> body_materials,
+          contact::InterfaceModel model, const ThermalSettings& settings = {});
+  ~Thermal();
+
+  // Replaces the committed (and trial, and peak) temperature field, °C.
+  void set_temperature(const Eigen::VectorXd& nodal_temperature);
+
+  // One backward Euler step of length dt (s) from the committed field, with the
+  // bulk Joule heat per cell Gauss point (W/m³, cell-major, may be empty) and the
+  // interface Joule heat per pairing point (W/m², may be empty). Repeated calls before
+  // commit() (staggered coupling) start from the previous call's result.
+  ThermalStepReport solve(double dt, const std::vector<fem::Point>& positions, const contact::ContactState& contact,
+                          const std::vector<double>& joule_heat,
+                          const std::vector<std::vector<double>>& interface_heat);
+  // Accepts the last solve: committed T, peak T and bonded points move forward.
+  void commit();
+
+  const Eigen::VectorXd& temperature() const;            // °C, last solve
+  const Eigen::VectorXd& committed_temperature() const;  // °C
+  const Eigen::VectorXd& peak_temperature() const;       // °C, committed nodal maximum
+  Eigen::VectorXd liquid_fraction() const;               // of temperature()
+  const ThermalEnergy& energy() const;                   // of the last solve
+  const contact::BondingState& bonding() const;          // committed
+  // h at every pairing point of the last solve (HTC·χ, or bonded), W/(m²K).
+  const std::vector<std::vector<double>>& interface_conductance() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace rsw::physics

@@ -1,0 +1,185 @@
+// Interface laws (contact/interface_laws.hpp) against hand-computed values of the
+// paper's equations 1 and 2, central finite differences of every derivative the
+// solvers use, the limit h_e → 0 as σ_n → 0, the C¹ closure factor, and bonding.
+#include "contact/interface_laws.hpp"
+#include "materials/material_library.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+
+using namespace rsw;
+
+namespace {
+// Central difference of f at x with step d.
+template <class F>
+double central_difference(F&& f, double x, double d) {
+  return (f(x + d) - f(x - d)) / (2 * d);
+}
+}  // namespace
+
+// Paper eq. 1 as printed: ρ = 3 (σ_soft/σ_n)(ρ_1 + ρ_2)/2 + ρ_c, h_e = 1/(ρ t_f).
+TEST(InterfaceLaws, BayWanheimMatchesPaperEquationOne) {
+  const double sigma_n = 100e6, sigma_soft = 400e6, rho_1 = 2.1e-8, rho_2 = 2.5e-7, rho_c = 2.1e-6, t_f = 1e-6;
+  const double rho_contact = 3 * (sigma_soft / sigma_n) * (rho_1 + rho_2) / 2 + rho_c;
+  const double expected = 1 / (rho_contact * t_f);
+  const auto law = contact::bay_wanheim_conductance(sigma_n, sigma_soft, 0.5 * (rho_1 + rho_2), rho_c, t_f);
+  std::printf("Bay-Wanheim: rho_contact = %.4e ohm m, h_e = %.6e S/m^2 (law %.6e)\n", rho_contact, expected,
+              law.conductance);
+  EXPECT_NEAR(law.conductance, expected, 1e-12 * expected);
+}
+
+TEST(InterfaceLaws, BayWanheimDerivativesMatchFiniteDifferences) {
+  const double sn = 250e6, ss = 600e6, rho = 6e-7, rc = 5e-6, tf = 2e-6;
+  const auto law = contact::bay_wanheim_conductance(sn, ss, rho, rc, tf);
+  const auto h = [&](double a, double b, double c) { return contact::bay_wanheim_conductance(a, b, c, rc, tf).conductance; };
+  const double d_sn = central_difference([&](double x) { return h(x, ss, rho); }, sn, 1e3);
+  const double d_ss = central_difference([&](double x) { return h(sn, x, rho); }, ss, 1e3);
+  const double d_rho = central_difference([&](double x) { return h(sn, ss, x); }, rho, 1e-12);
+  EXPECT_NEAR(law.d_normal_stress, d_sn, 1e-6 * std::abs(d_sn));
+  EXPECT_NEAR(law.d_flow_stress, d_ss, 1e-6 * std::abs(d_ss));
+  EXPECT_NEAR(law.d_resistivity, d_rho, 1e-6 * std::abs(d_rho));
+}
+
+// σ_n → 0 gives h_e → 0 with the finite slope 1/(3 t_f σ_soft ρ̄): no division by zero,
+// and a separating contact (σ_n <= 0) conducts nothing.
+TEST(InterfaceLaws, BayWanheimConductanceVanishesSmoothlyWithPressure) {
+  const double ss = 500e6, rho = 5e-7, rc = 2e-6, tf = 1e-6;
+  EXPECT_EQ(contact::bay_wanheim_conductance(0.0, ss, rho, rc, tf).conductance, 0.0);
+  EXPECT_EQ(contact::bay_wanheim_conductance(-1e6, ss, rho, rc, tf).conductance, 0.0);
+  const double slope = 1 / (3 * tf * ss * rho);
+  double previous = 0;
+  for (double sn : {1e-3, 1.0, 1e3, 1e6, 1e8}) {
+    const auto law = contact::bay_wanheim_conductance(sn, ss, rho, rc, tf);
+    EXPECT_TRUE(std::isfinite(law.conductance));
+    EXPECT_GT(law.conductance, previous);
+    previous = law.conductance;
+    if (sn <= 1.0) {
+      EXPECT_NEAR(law.conductance / sn, slope, 1e-8 * slope);
+    }
+  }
+  // The large-pressure limit is the coating alone: 1/(ρ_c t_f).
+  EXPECT_NEAR(contact::bay_wanheim_conductance(1e30, ss, rho, rc, tf).conductance, 1 / (rc * tf), 1e-9 / (rc * tf));
+}
+
+// Paper eq. 2 at F_n = 0 and F_n = σ_d with MODEL.md's constants, and with other P3, P4.
+TEST(InterfaceLaws, SimufactConductanceMatchesPaperEquationTwo) {
+  const double p1 = 1e-3, c1 = 320, c2 = 30, sd = 400e6;
+  const contact::ThermalContactConstants defaults;
+  const double scale = p1 * (c1 + c2) / 2 / defaults.p2;
+  const double at_zero = contact::simufact_conductance(0.0, sd, 0.5 * (c1 + c2), p1, defaults).conductance;
+  const double at_yield = contact::simufact_conductance(sd, sd, 0.5 * (c1 + c2), p1, defaults).conductance;
+  std::printf("Simufact HTC, P1 = 1e-3, c = 320/30 W/mK: %.4e W/m^2K at F_n = 0, %.4e at F_n = sigma_d\n", at_zero,
+              at_yield);
+  EXPECT_NEAR(at_zero, scale * (1 - std::exp(-1.0)), 1e-12 * scale);
+  EXPECT_NEAR(at_yield, scale * (1 - std::exp(-2.0)), 1e-12 * scale);
+  const contact::ThermalContactConstants other{2e-6, 2.0, 1.5};
+  const double fn = 150e6;
+  const double expected = p1 * 175 / 2e-6 * std::pow(1 - std::exp(-2.0 * (fn / sd + 2.0)), 1.5);
+  EXPECT_NEAR(contact::simufact_conductance(fn, sd, 175, p1, other).conductance, expected, 1e-12 * expected);
+}
+
+TEST(InterfaceLaws, SimufactDerivativesMatchFiniteDifferences) {
+  const contact::ThermalContactConstants c{1e-6, 0.7, 1.3};
+  const double fn = 300e6, sd = 500e6, k = 120, p1 = 2e-3;
+  const auto law = contact::simufact_conductance(fn, sd, k, p1, c);
+  const auto h = [&](double a, double b, double kk) { return contact::simufact_conductance(a, b, kk, p1, c).conductance; };
+  const double d_fn = central_difference([&](double x) { return h(x, sd, k); }, fn, 1e3);
+  const double d_sd = central_difference([&](double x) { return h(fn, x, k); }, sd, 1e3);
+  const double d_k = central_difference([&](double x) { return h(fn, sd, x); }, k, 1e-4);
+  EXPECT_NEAR(law.d_normal_stress, d_fn, 1e-6 * std::abs(d_fn));
+  EXPECT_NEAR(law.d_yield_stress, d_sd, 1e-6 * std::abs(d_sd));
+  EXPECT_NEAR(law.d_conductivity, d_k, 1e-6 * std::abs(d_k));
+}
+
+// χ(g): 1 when closed, 0 beyond g_c, value and slope continuous everywhere (C¹), the
+// slope equal to the finite difference of the value.
+TEST(InterfaceLaws, ClosureFactorIsContinuouslyDifferentiable) {
+  const double gc = 1e-6;
+  EXPECT_EQ(contact::closure_factor(-1e-6, gc).value, 1.0);
+  EXPECT_EQ(contact::closure_factor(0.0, gc).value, 1.0);
+  EXPECT_EQ(contact::closure_factor(gc, gc).value, 0.0);
+  EXPECT_EQ(contact::closure_factor(5 * gc, gc).value, 0.0);
+  EXPECT_NEAR(contact::closure_factor(0.5 * gc, gc).value, 0.5, 1e-15);
+  const double eps = 1e-9 * gc;
+  for (double g : {0.0, gc}) {  // the joints: value and slope match from both sides
+    const auto below = contact::closure_factor(g - eps, gc), above = contact::closure_factor(g + eps, gc);
+    EXPECT_NEAR(below.value, above.value, 1e-8);
+    EXPECT_NEAR(below.slope * gc, above.slope * gc, 1e-8);
+  }
+  double worst = 0;
+  for (int i = -5; i <= 25; ++i) {
+    const double g = i * gc / 20 + 0.013 * gc;
+    const double fd = central_difference([&](double x) { return contact::closure_factor(x, gc).value; }, g, 1e-6 * gc);
+    worst = std::max(worst, std::abs(fd - contact::closure_factor(g, gc).slope) * gc);
+  }
+  std::printf("closure factor: largest |d chi/dg - finite difference| * g_c = %.2e\n", worst);
+  EXPECT_LT(worst, 1e-8);
+}
+
+TEST(InterfaceLaws, InterfaceJouleHeatIsConductanceTimesJumpSquared) {
+  const auto q = contact::interface_joule_heat(3e10, 2e-3);
+  EXPECT_NEAR(q.value, 3e10 * 4e-6, 1e-6);
+  const double fd = central_difference([](double x) { return contact::interface_joule_heat(3e10, x).value; }, 2e-3, 1e-7);
+  EXPECT_NEAR(q.slope, fd, 1e-6 * fd);
+}
+
+// The material wrappers: properties at the interface temperature, and d/dT and
+// d/dσ_n equal to finite differences (CuCrZr on DP1200 at 555 °C, between table points).
+TEST(InterfaceLaws, MaterialConductancesHaveConsistentDerivatives) {
+  materials::MaterialLibrary library;
+  const auto copper = library.load("CuCrZr");
+  const auto steel = library.load("DP1200");
+  contact::InterfaceProperties props{"es", 1e-5, 5e-6, 1e-2, false};
+  const contact::ThermalContactConstants constants;
+  const double T = 555.0, p = 200e6;
+
+  const auto he = contact::electrical_contact_conductance(copper, steel, p, T, props);
+  const double soft = std::min(copper.yield_stress(0, T).yield_stress, steel.yield_stress(0, T).yield_stress);
+  const double rho_bar = 0.5 * (copper.electrical_resistivity(T).value + steel.electrical_resistivity(T).value);
+  const double expected = 1 / ((3 * soft / p * rho_bar + props.coating_resistivity) * props.film_thickness);
+  EXPECT_NEAR(he.value, expected, 1e-12 * expected);
+  const auto he_T = [&](double x) { return contact::electrical_contact_conductance(copper, steel, p, x, props).value; };
+  const auto he_p = [&](double x) { return contact::electrical_contact_conductance(copper, steel, x, T, props).value; };
+  EXPECT_NEAR(he.d_temperature, central_difference(he_T, T, 1e-3), 1e-5 * std::abs(he.d_temperature));
+  EXPECT_NEAR(he.d_pressure, central_difference(he_p, p, 1e3), 1e-6 * std::abs(he.d_pressure));
+
+  const auto ht = contact::thermal_contact_conductance(copper, steel, p, T, props, constants);
+  const auto ht_T = [&](double x) {
+    return contact::thermal_contact_conductance(copper, steel, p, x, props, constants).value;
+  };
+  const auto ht_p = [&](double x) {
+    return contact::thermal_contact_conductance(copper, steel, x, T, props, constants).value;
+  };
+  EXPECT_NEAR(ht.d_temperature, central_difference(ht_T, T, 1e-3), 1e-5 * std::abs(ht.d_temperature) + 1e-9 * ht.value);
+  EXPECT_NEAR(ht.d_pressure, central_difference(ht_p, p, 1e3), 1e-6 * std::abs(ht.d_pressure));
+  std::printf("CuCrZr/DP1200 at 555 degC, 200 MPa: h_e = %.4e S/m^2, HTC = %.4e W/m^2K (P1 = 1e-2)\n", he.value,
+              ht.value);
+
+  const auto hb = contact::bonded_thermal_conductance(steel, steel, T, 62.5e-6, 1e3);
+  const auto hb_T = [&](double x) { return contact::bonded_thermal_conductance(steel, steel, x, 62.5e-6, 1e3).value; };
+  EXPECT_NEAR(hb.d_temperature, central_difference(hb_T, T, 1e-3), 1e-6 * std::abs(hb.d_temperature));
+  const auto hbe = contact::bonded_electrical_conductance(steel, steel, T, 62.5e-6, 1e3);
+  const auto hbe_T = [&](double x) {
+    return contact::bonded_electrical_conductance(steel, steel, x, 62.5e-6, 1e3).value;
+  };
+  EXPECT_NEAR(hbe.d_temperature, central_difference(hbe_T, T, 1e-3), 1e-6 * std::abs(hbe.d_temperature));
+}
+
+// A bonded interface adds a resistance 1/h = h_local/(2 F k) per unit area: 1/(2F) of
+// one cell's bulk resistance h_local/k.
+TEST(InterfaceLaws, BondedInterfaceResistanceIsNegligibleAgainstBulk) {
+  const double k = 30.0, h_local = 62.5e-6, factor = 1e3;
+  const double bonded = contact::bonded_conductance(k, k, h_local, factor);
+  EXPECT_NEAR(bonded, factor * 2 * k / h_local, 1e-9 * bonded);
+  const double ratio = (1 / bonded) / (h_local / k);
+  std::printf("bonded interface resistance / one cell's bulk resistance = %.1e\n", ratio);
+  EXPECT_LE(ratio, 1e-3);
+}
+
+TEST(InterfaceLaws, PointBondsOnlyWhenBothSidesReachTheSolidus) {
+  EXPECT_TRUE(contact::bonds(1470, 1470, 1500, 1470));
+  EXPECT_FALSE(contact::bonds(1469.9, 1470, 1600, 1470));
+  EXPECT_FALSE(contact::bonds(1600, 1470, 1400, 1470));
+}

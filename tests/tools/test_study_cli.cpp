@@ -1,0 +1,244 @@
+// `rsw features` and `rsw study` as a user runs them, and tools/plot_study.py on their
+// output. The binary is rsw_analytic (tests/calibration/analytic_rsw_main.cpp): the
+// same commands (tools/study_commands.cpp) with analytic forward models in place of
+// the weld simulator, so a study takes well under a second.
+#include "calibration/farm.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <string>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct CommandResult {
+  int status = -1;
+  std::string output;  // stdout and stderr
+};
+
+CommandResult run_command(const std::string& command) {
+  CommandResult r;
+  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen((command + " 2>&1").c_str(), "r"), pclose);
+  std::array<char, 4096> buf;
+  while (fgets(buf.data(), buf.size(), pipe.get())) r.output += buf.data();
+  r.status = WEXITSTATUS(pclose(pipe.release()));
+  return r;
+}
+
+CommandResult run_rsw(const std::string& args) { return run_command(std::string(RSW_ANALYTIC_BINARY) + " " + args); }
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("rsw_study_cli_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+fs::path write_file(const fs::path& path, const std::string& text) {
+  std::ofstream out(path);
+  out << text;
+  return path;
+}
+
+std::string read_file(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+const std::string shipped_signal = std::string(RSW_SOURCE_DIR) + "/validation/signals/measured_example.csv";
+
+// A small LHS study of the smooth analytic model with the weld's feature names.
+fs::path write_lhs_study(const fs::path& dir, const std::string& name, int n_points) {
+  write_file(dir / "case.yaml", "analytic: {function: smooth, fail_above: 0.95}\n");
+  return write_file(dir / (name + ".yaml"), "study: {name: " + name + R"(}
+parameters:
+  - {name: a, config_key: test.a, prior: uniform, lower: 0, upper: 1}
+  - {name: p1, config_key: test.p1, prior: log10_uniform, lower: 1e-3, upper: 1e-1}
+  - {name: c, config_key: test.c, prior: truncated_normal, mean: 2, standard_deviation: 1, lower: 0, upper: 5}
+design: {kind: lhs, n_points: )" + std::to_string(n_points) + R"(, seed: 4}
+features: [{name: R_beta}, {name: dS_P}, {name: T_max}, {name: d_n_liq}]
+model: {case: case.yaml}
+)");
+}
+
+}  // namespace
+
+TEST(Features, CliPrintsFeaturesOfShippedSignal) {
+  const fs::path dir = fresh_dir("features");
+  const fs::path json_path = dir / "features.json";
+  const CommandResult r = run_rsw("features " + shipped_signal + " -o " + json_path.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("weld stage 1.00 .. 148.98 ms"), std::string::npos) << r.output;
+  for (const char* name : {"R_alpha", "R_beta", "R_gamma", "t_beta", "m_1", "R_m", "dS_P", "S_end", "dS_net", "S_dot_exp"}) {
+    EXPECT_NE(r.output.find(std::string("  ") + name + " "), std::string::npos) << name << "\n" << r.output;
+  }
+  // The synthetic weld: resistance peak near 180 µΩ, expansion near 30 µm.
+  const auto json = nlohmann::json::parse(read_file(json_path));
+  const double r_beta = json["features"]["R_beta"]["value"].get<double>();
+  const double ds_p = json["features"]["dS_P"]["value"].get<double>();
+  EXPECT_NEAR(r_beta, 180e-6, 5e-6);
+  EXPECT_NEAR(ds_p, 32e-6, 4e-6);
+  EXPECT_EQ(json["features"]["R_beta"]["unit"], "ohm");
+  EXPECT_NEAR(json["weld_stage"]["peak_current"].get<double>(), 8000, 150);
+  EXPECT_NE(r.output.find("R_beta       resistance           179.9"), std::string::npos) << r.output;
+  fs::remove_all(dir);
+}
+
+TEST(Features, SignalWithoutCurrentPulseIsAClearError) {
+  const fs::path dir = fresh_dir("no_pulse");
+  std::string text = "time [ms], current [kA], voltage [V]\n";
+  for (int k = 0; k < 50; ++k) text += std::to_string(k) + ", 0, 0\n";
+  const fs::path no_current = write_file(dir / "no_current.csv", text);
+  CommandResult r = run_rsw("features " + no_current.string());
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find(no_current.string() + ": no current pulse: the current is zero over the whole record"),
+            std::string::npos) << r.output;
+
+  text = "time [ms], current [kA], voltage [V]\n";
+  for (int k = 0; k < 50; ++k) text += std::to_string(k) + ", 8, 1.4\n";
+  const fs::path flat = write_file(dir / "flat.csv", text);
+  r = run_rsw("features " + flat.string());
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find(flat.string() + ": no current pulse"), std::string::npos) << r.output;
+
+  const fs::path short_file = write_file(dir / "short.csv", "time [ms], current [kA], voltage [V]\n0, 8, 1.4\n");
+  r = run_rsw("features " + short_file.string());
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find("short.csv: a signal needs at least two data rows, found 1"), std::string::npos) << r.output;
+  fs::remove_all(dir);
+}
+
+TEST(StudyCli, RunResumeAndSensitivityWriteTables) {
+  const fs::path dir = fresh_dir("run");
+  const fs::path study = write_lhs_study(dir, "small", 40);
+  const fs::path out = dir / "out";
+  CommandResult r = run_rsw("study run " + study.string() + " --workers 2 -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("study small: 40/40 runs done (40 now, 0 before), 2 failed"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("failed run "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("runs 40/40, 2 failed, elapsed "), std::string::npos) << r.output;
+  const std::string runs = read_file(out / "small_runs.csv");
+  EXPECT_EQ(runs.rfind("index,status,wall_time_s,rank,a [1],p1 [1],c [1],R_beta [ohm],dS_P [m],T_max [degC],d_n_liq [m],"
+                       "failure_reason\n", 0), 0u) << runs;
+  EXPECT_TRUE(fs::exists(out / "small_runs.json"));
+
+  // Without --resume an existing study is not overwritten; with it nothing is repeated.
+  r = run_rsw("study run " + study.string() + " -q -o " + out.string());
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("exists already; continue it with --resume"), std::string::npos) << r.output;
+  r = run_rsw("study run " + study.string() + " -q --resume -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("40/40 runs done (0 now, 40 before)"), std::string::npos) << r.output;
+
+  r = run_rsw("study sensitivity " + study.string() + " -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("study small: 40 runs, 38 used, 2 failed (excluded)"), std::string::npos) << r.output;
+  const std::string sobol = read_file(out / "small_sobol.csv");
+  EXPECT_EQ(sobol.rfind("feature,group,unit,parameter,first_order,total_order,loo_error,corrected_loo_error,n_runs,"
+                        "degree,n_terms\nR_beta,resistance,ohm,a,", 0), 0u) << sobol;
+  EXPECT_TRUE(fs::exists(out / "small_sobol_second_order.csv"));
+  const auto json = nlohmann::json::parse(read_file(out / "small_sensitivity.json"));
+  EXPECT_EQ(json["runs"]["failed"], 2);
+  EXPECT_EQ(json["features"].size(), 4u);
+  EXPECT_EQ(json["features"][0]["first_order"].size(), 3u);
+  fs::remove_all(dir);
+}
+
+TEST(StudyCli, ArrayTasksMergeIntoTheStudy) {
+  const fs::path dir = fresh_dir("tasks");
+  const fs::path study = write_lhs_study(dir, "tasks", 20);
+  const fs::path out = dir / "out";
+  std::string parts;
+  for (int i = 0; i < 2; ++i) {
+    const CommandResult r = run_rsw("study run " + study.string() + " -q --workers 1 --task " + std::to_string(i) +
+                                    "/2 -o " + out.string());
+    ASSERT_EQ(r.status, 0) << r.output;
+    EXPECT_NE(r.output.find("study tasks task " + std::to_string(i) + "/2: 10/10 runs done"), std::string::npos) << r.output;
+    const fs::path part = out / ("tasks.task-" + std::to_string(i) + "-of-2.h5");
+    EXPECT_TRUE(fs::exists(part)) << r.output;
+    parts += " " + part.string();
+  }
+  EXPECT_FALSE(fs::exists(out / "tasks.h5"));
+  const CommandResult r = run_rsw("study merge " + study.string() + parts + " -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("20 runs added, 0 already present; 19 ok, 1 failed, 0 not run"), std::string::npos) << r.output;
+  const rsw::calibration::StudyResults merged = rsw::calibration::read_study_results(out / "tasks.h5");
+  EXPECT_EQ(merged.count(rsw::calibration::StudyResults::Status::pending), 0u);
+  EXPECT_TRUE(fs::exists(out / "tasks_runs.csv"));
+  fs::remove_all(dir);
+}
+
+TEST(StudyCli, BadStudyFileExitsWithFileLineKeyAndAllowed) {
+  const fs::path dir = fresh_dir("bad");
+  const fs::path study = write_file(dir / "bad.yaml", R"(parameters:
+  - {name: a, config_key: test.a, prior: uniform, lower: 0, upper: 1}
+design: {kind: lhs, n_points: 1}
+features: [{name: R_beta}]
+)");
+  const CommandResult r = run_rsw("study run " + study.string());
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("bad.yaml:3:31: design.n_points: '1' is out of range; allowed: [2, 1e6]"),
+            std::string::npos) << r.output;
+  const fs::path good = write_lhs_study(dir, "good", 4);
+  const CommandResult task = run_rsw("study run " + good.string() + " --task 2/2");
+  EXPECT_NE(task.status, 0);
+  EXPECT_NE(task.output.find("--task '2/2': i must be less than n"), std::string::npos) << task.output;
+  fs::remove_all(dir);
+}
+
+TEST(PlotStudy, DrawsOneAtATimeCurvesAndSobolHeatmaps) {
+  const CommandResult has_libraries = run_command("/usr/bin/python3 -c 'import matplotlib, h5py, numpy'");
+  if (has_libraries.status != 0) {
+    GTEST_SKIP() << "/usr/bin/python3 lacks matplotlib, h5py or numpy (run tools/setup.sh): " << has_libraries.output;
+  }
+  const fs::path dir = fresh_dir("plot");
+  write_file(dir / "case.yaml", "analytic: {function: smooth, fail_above: 0.95}\n");
+  const fs::path oat = write_file(dir / "sweep.yaml", R"(study: {name: sweep}
+parameters:
+  - {name: a, config_key: test.a, prior: uniform, lower: 0, upper: 1}
+  - {name: p1, config_key: test.p1, prior: log10_uniform, lower: 1e-3, upper: 1e-1}
+design: {kind: oat, n_levels: 5, oat_levels: endpoints}
+features: [{name: R_beta}, {name: R_m}, {name: dS_P}, {name: T_max}, {name: d_n_liq}]
+model: {case: case.yaml}
+)");
+  const fs::path lhs = write_lhs_study(dir, "lhs", 40);
+  const fs::path out = dir / "out";
+  ASSERT_EQ(run_rsw("study run " + oat.string() + " -q -o " + out.string()).status, 0);
+  ASSERT_EQ(run_rsw("study run " + lhs.string() + " -q -o " + out.string()).status, 0);
+  ASSERT_EQ(run_rsw("study sensitivity " + lhs.string() + " -o " + out.string()).status, 0);
+
+  const std::string script = "/usr/bin/python3 " + std::string(RSW_SOURCE_DIR) + "/tools/plot_study.py ";
+  CommandResult r = run_command(script + "oat " + (out / "sweep.h5").string() + " -o " + (dir / "plots").string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  r = run_command(script + "oat " + (out / "sweep.h5").string() + " --absolute --features R_beta,T_max -o " +
+                  (dir / "absolute").string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  r = run_command(script + "sobol " + (out / "lhs_sensitivity.json").string() + " -o " + (dir / "plots").string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  for (const fs::path& png : {dir / "plots" / "sweep_oat_a.png", dir / "plots" / "sweep_oat_p1.png",
+                             dir / "absolute" / "sweep_oat_a.png", dir / "plots" / "lhs_sobol_first_order.png",
+                             dir / "plots" / "lhs_sobol_total_order.png"}) {
+    ASSERT_TRUE(fs::exists(png)) << png;
+    EXPECT_GT(fs::file_size(png), 10000u) << png;
+    EXPECT_EQ(read_file(png).substr(1, 3), "PNG") << png;
+  }
+  // A study that is not one-at-a-time is refused with the reason.
+  r = run_command(script + "oat " + (out / "lhs.h5").string());
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find("is not a one-at-a-time study"), std::string::npos) << r.output;
+  fs::remove_all(dir);
+}

@@ -1,0 +1,329 @@
+// `rsw study ...` and `rsw features FILE`: see study_commands.hpp. The run table
+// <name>_runs.csv / .json (one row per design point: status, wall time, θ, features,
+// failure reason) is written whenever a study file is complete, after `run` or `merge`.
+#include "tools/study_commands.hpp"
+
+#include "calibration/farm.hpp"
+#include "calibration/features.hpp"
+#include "calibration/sensitivity.hpp"
+#include "calibration/signal.hpp"
+#include "calibration/study.hpp"
+
+#include "fem/units.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace rsw::tools {
+namespace {
+
+namespace fs = std::filesystem;
+namespace cal = calibration;
+using Json = nlohmann::ordered_json;
+
+struct StudyOptions {
+  std::string study_file;
+  std::vector<std::string> overrides;
+  std::string output_dir;
+  std::size_t n_workers = 0;
+  bool resume = false;
+  std::string task;
+  double run_timeout = 0;
+  bool quiet = false;
+  std::vector<std::string> parts;
+  std::string format = "markdown";
+};
+
+cal::Study load_study(const StudyOptions& options) {
+  cal::Study study = cal::Study::load(options.study_file, options.overrides);
+  if (!options.output_dir.empty()) study.set_output_folder(options.output_dir);
+  return study;
+}
+
+std::string csv_number(double value) {
+  if (!std::isfinite(value)) return "nan";
+  std::ostringstream out;
+  out << std::setprecision(17) << value;
+  return out.str();
+}
+
+std::string csv_text(const std::string& text) {
+  if (text.find_first_of(",\"\n") == std::string::npos) return text;
+  std::string quoted = "\"";
+  for (char c : text) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return quoted + "\"";
+}
+
+const char* status_name(cal::StudyResults::Status status) {
+  switch (status) {
+    case cal::StudyResults::Status::ok:
+      return "ok";
+    case cal::StudyResults::Status::failed:
+      return "failed";
+    case cal::StudyResults::Status::pending:
+      return "pending";
+  }
+  return "unknown";
+}
+
+void write_text(const fs::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+  if (!out) throw std::runtime_error("cannot write '" + path.string() + "'");
+}
+
+// <name>_runs.csv and <name>_runs.json in the output folder.
+std::vector<fs::path> write_run_tables(const cal::Study& study, const cal::StudyResults& results) {
+  const auto& names = results.parameter_names;
+  const auto& features = results.feature_names;
+  std::ostringstream csv;
+  csv << "index,status,wall_time_s,rank";
+  for (std::size_t j = 0; j < names.size(); ++j) {
+    csv << "," << csv_text(names[j] + " [" + study.parameter_space().parameter(j).unit + "]");
+  }
+  for (const auto& name : features) {
+    const std::string unit = cal::describe_feature(name).unit;
+    csv << "," << csv_text(unit.empty() ? name : name + " [" + unit + "]");
+  }
+  csv << ",failure_reason\n";
+  Json runs = Json::array();
+  for (std::size_t i = 0; i < results.n_points(); ++i) {
+    const auto ii = static_cast<Eigen::Index>(i);
+    csv << i << "," << status_name(results.status[i]) << "," << csv_number(results.wall_time[ii]) << ","
+        << results.rank[i];
+    Json theta = Json::object(), y = Json::object();
+    for (std::size_t j = 0; j < names.size(); ++j) {
+      csv << "," << csv_number(results.points(ii, static_cast<Eigen::Index>(j)));
+      theta[names[j]] = results.points(ii, static_cast<Eigen::Index>(j));
+    }
+    for (std::size_t k = 0; k < features.size(); ++k) {
+      const double value = results.features(ii, static_cast<Eigen::Index>(k));
+      csv << "," << csv_number(value);
+      y[features[k]] = std::isfinite(value) ? Json(value) : Json(nullptr);
+    }
+    csv << "," << csv_text(results.failure_reasons[i]) << "\n";
+    Json run = {{"index", i}, {"status", status_name(results.status[i])}, {"theta", theta}, {"features", y}};
+    run["wall_time"] = std::isfinite(results.wall_time[ii]) ? Json(results.wall_time[ii]) : Json(nullptr);
+    if (results.status[i] == cal::StudyResults::Status::failed) run["failure_reason"] = results.failure_reasons[i];
+    if (!results.swept_parameter.empty()) {
+      const int swept = results.swept_parameter[i];
+      run["swept_parameter"] = swept < 0 ? Json(nullptr) : Json(names[static_cast<std::size_t>(swept)]);
+    }
+    runs.push_back(run);
+  }
+  Json root = {{"study", study.name()}, {"parameters", names}, {"features", features}, {"runs", runs}};
+  const fs::path folder = study.output_folder();
+  fs::create_directories(folder);
+  const fs::path csv_path = folder / (study.name() + "_runs.csv");
+  const fs::path json_path = folder / (study.name() + "_runs.json");
+  write_text(csv_path, csv.str());
+  write_text(json_path, root.dump(2) + "\n");
+  return {csv_path, json_path};
+}
+
+void print_failures(const cal::StudyResults& results) {
+  for (std::size_t i = 0; i < results.n_points(); ++i) {
+    if (results.status[i] == cal::StudyResults::Status::failed) {
+      std::cout << "  failed run " << i << ": " << results.failure_reasons[i] << "\n";
+    }
+  }
+}
+
+void run_study(const StudyOptions& options, const ForwardModelFactory& factory) {
+  const cal::Study study = load_study(options);
+  cal::FarmOptions farm_options;
+  farm_options.n_workers = options.n_workers;
+  farm_options.resume = options.resume;
+  if (!options.task.empty()) farm_options.task = cal::TaskPartition::parse(options.task);
+  farm_options.run_timeout = options.run_timeout;
+  farm_options.progress = options.quiet ? nullptr : &std::cerr;
+  const std::unique_ptr<cal::ForwardModel> model = factory(study);
+  if (!model) throw std::runtime_error("study '" + study.name() + "': no forward model");
+  const fs::path file = cal::task_results_file(study.results_file(), farm_options.task);
+  cal::EvaluationFarm farm(*model, study.design(), file, farm_options);
+  const cal::FarmSummary summary = farm.run();
+  if (!summary.writer) return;  // other MPI ranks: rank 0 reports
+
+  std::cout << "study " << study.name() << (farm_options.task.is_whole() ? "" : " task " + farm_options.task.describe())
+            << ": " << summary.n_ok + summary.n_failed << "/" << summary.n_assigned << " runs done ("
+            << summary.n_evaluated << " now, " << summary.n_done_before << " before), " << summary.n_failed
+            << " failed, " << cal::format_duration(summary.elapsed) << " on " << summary.n_workers << " worker"
+            << (summary.n_workers == 1 ? "" : "s") << (summary.n_ranks > 1 ? " over " + std::to_string(summary.n_ranks) + " MPI ranks" : "")
+            << "\n  results: " << file.string() << "\n";
+  const cal::StudyResults results = cal::read_study_results(file);
+  print_failures(results);
+  if (summary.interrupted) {
+    throw std::runtime_error("study '" + study.name() + "' interrupted; continue it with: rsw study run " +
+                             options.study_file + " --resume" + (options.task.empty() ? "" : " --task " + options.task));
+  }
+  if (!summary.complete) return;
+  if (farm_options.task.is_whole()) {
+    for (const auto& table : write_run_tables(study, results)) std::cout << "  table: " << table.string() << "\n";
+  } else {
+    std::cout << "  when every task is done: rsw study merge " << options.study_file << " "
+              << cal::task_results_file(study.results_file(), cal::TaskPartition{0, farm_options.task.count}).string()
+              << " ...\n";
+  }
+}
+
+void merge_study(const StudyOptions& options) {
+  const cal::Study study = load_study(options);
+  std::vector<fs::path> parts(options.parts.begin(), options.parts.end());
+  const cal::MergeSummary summary = cal::merge_study_files(study.design(), study.results_file(), parts);
+  std::cout << "study " << study.name() << ": merged " << parts.size() << " file" << (parts.size() == 1 ? "" : "s")
+            << " into " << study.results_file().string() << ": " << summary.n_added << " runs added, "
+            << summary.n_duplicates << " already present; " << summary.n_ok << " ok, " << summary.n_failed
+            << " failed, " << summary.n_pending << " not run\n";
+  const cal::StudyResults results = cal::read_study_results(study.results_file());
+  print_failures(results);
+  if (summary.n_pending == 0) {
+    for (const auto& table : write_run_tables(study, results)) std::cout << "  table: " << table.string() << "\n";
+  }
+}
+
+void study_sensitivity(const StudyOptions& options) {
+  const cal::Study study = load_study(options);
+  const cal::StudyResults results = cal::read_study_results(study.results_file());
+  const cal::SensitivityReport report = cal::analyse_sensitivity(study.design(), results, study.pce_options());
+  std::cout << cal::format_sensitivity_summary(report);
+  for (const auto& table : cal::write_sensitivity_tables(report, study.output_folder(), study.name())) {
+    std::cout << "table: " << table.string() << "\n";
+  }
+}
+
+void show_study(const StudyOptions& options) {
+  const cal::Study study = load_study(options);
+  const cal::StudyDesign design = study.design();
+  std::cout << study.config().to_yaml();
+  std::cout << "# design: " << design.kind << ", " << design.points.rows() << " runs of "
+            << design.parameters.n_parameters() << " parameters, " << design.feature_names.size() << " features\n"
+            << "# results: " << study.results_file().string() << "\n";
+  if (!study.case_file().empty()) std::cout << "# weld case: " << study.case_file().string() << "\n";
+}
+
+// --- features ----------------------------------------------------------------------
+
+// Units to print features in (JSON keeps SI).
+std::string display_unit(const cal::FeatureInfo& info) {
+  if (info.unit == "ohm") return "uohm";
+  if (info.unit == "ohm/s") return "uohm/ms";
+  if (info.unit == "s") return "ms";
+  if (info.unit == "m") return info.group == "displacement" ? "um" : "mm";
+  if (info.unit == "m/s") return "mm/s";
+  return info.unit;
+}
+
+struct FeaturesOptions {
+  std::string signal_file;
+  std::string json_file;
+};
+
+void print_features(const FeaturesOptions& options) {
+  const cal::Signal signal = cal::read_signal_csv(options.signal_file);
+  const cal::FeatureSettings settings;
+  cal::FeatureValues values;
+  cal::WeldStage stage;
+  try {
+    stage = cal::find_weld_stage(signal, settings.weld_current_fraction);
+    values = cal::extract_features(signal, settings);
+  } catch (const cal::FeatureError& e) {
+    throw cal::FeatureError(options.signal_file + ": " + e.what());
+  } catch (const cal::SignalError& e) {
+    throw cal::SignalError(options.signal_file + ": " + e.what());
+  }
+  std::printf("features of %s\n", options.signal_file.c_str());
+  std::printf("  weld stage %.2f .. %.2f ms, peak current %.3f kA\n", stage.start * 1e3, stage.end * 1e3,
+              stage.peak_current * 1e-3);
+  Json features = Json::object();
+  for (std::size_t k = 0; k < values.size(); ++k) {
+    const std::string& name = values.names()[k];
+    const double value = values.values()[k];
+    const cal::FeatureInfo info = cal::describe_feature(name);
+    const std::string shown_unit = display_unit(info);
+    const double shown = info.unit.empty() ? value : fem::convert_units(value, info.unit, shown_unit);
+    std::printf("  %-12s %-13s %14.6g %s\n", name.c_str(), info.group.c_str(), shown, shown_unit.c_str());
+    features[name] = {{"value", value}, {"unit", info.unit}, {"group", info.group}};
+  }
+  if (options.json_file.empty()) return;
+  Json root = {{"file", options.signal_file},
+               {"weld_stage", {{"start", stage.start}, {"end", stage.end}, {"peak_current", stage.peak_current}}},
+               {"units", "SI (temperatures in degC); times from the weld start, weld_stage on the record's clock"},
+               {"features", features}};
+  const fs::path json_path(options.json_file);
+  if (json_path.has_parent_path()) fs::create_directories(json_path.parent_path());
+  write_text(json_path, root.dump(2) + "\n");
+  std::printf("  written: %s\n", options.json_file.c_str());
+}
+
+}  // namespace
+
+void add_study_commands(CLI::App& app, ForwardModelFactory model_factory) {
+  auto options = std::make_shared<StudyOptions>();
+  auto factory = std::make_shared<ForwardModelFactory>(std::move(model_factory));
+  CLI::App* study = app.add_subcommand("study", "Designs, sweeps and sensitivity studies of the forward model");
+  study->require_subcommand(1);
+
+  const auto add_study_file = [options](CLI::App* command) {
+    command->add_option("study", options->study_file, "Study file (YAML)")->required();
+    command->add_option("--set", options->overrides, "Override a study key: --set key=value (repeatable)")
+        ->take_all()
+        ->allow_extra_args(false);
+    command->add_option("-o,--output", options->output_dir, "Output folder (default: study.output of the study file)");
+  };
+
+  CLI::App* run = study->add_subcommand("run", "Evaluate the study's design (parallel, resumable; MPI under mpirun)");
+  add_study_file(run);
+  run->add_option("--workers", options->n_workers,
+                  "Worker processes (per MPI rank under mpirun); 0: one per core, one per rank under MPI")
+      ->capture_default_str();
+  run->add_flag("--resume", options->resume, "Continue an existing results file without repeating finished runs");
+  run->add_option("--task", options->task, "Array-job task i/n: evaluate the points with index % n == i into a partial file");
+  run->add_option("--timeout", options->run_timeout, "Time limit per run in seconds (0: none); a run over it is recorded as failed")
+      ->check(CLI::NonNegativeNumber);
+  run->add_flag("-q,--quiet", options->quiet, "No progress lines");
+  run->callback([options, factory]() { run_study(*options, *factory); });
+
+  CLI::App* merge = study->add_subcommand("merge", "Merge the partial files of array-job tasks into the study file");
+  add_study_file(merge);
+  merge->add_option("parts", options->parts, "Partial results files (.task-i-of-n.h5)")->required();
+  merge->callback([options]() { merge_study(*options); });
+
+  CLI::App* sensitivity =
+      study->add_subcommand("sensitivity", "Sparse PCE and Sobol indices per feature of a finished study; CSV/JSON tables");
+  add_study_file(sensitivity);
+  sensitivity->callback([options]() { study_sensitivity(*options); });
+
+  CLI::App* show = study->add_subcommand("show", "Print the resolved study file and the size of its design");
+  add_study_file(show);
+  show->callback([options]() { show_study(*options); });
+
+  CLI::App* schema = study->add_subcommand("schema", "Print every study key with default, unit, range and doc");
+  schema->add_option("--format", options->format, "Output format")
+      ->check(CLI::IsMember({"markdown", "json"}))
+      ->capture_default_str();
+  schema->callback([options]() {
+    const fem::ConfigSchema s = cal::study_schema();
+    std::cout << (options->format == "json" ? s.to_json() : s.to_markdown());
+  });
+}
+
+void add_features_command(CLI::App& app) {
+  auto options = std::make_shared<FeaturesOptions>();
+  CLI::App* features = app.add_subcommand("features", "Print the calibration features of a signal file (MODEL.md §10)");
+  features->add_option("file", options->signal_file, "Signal file: CSV with 'time [ms], current [kA], ...' header")
+      ->required();
+  features->add_option("-o,--output", options->json_file, "Also write the features as JSON (SI units) to this file");
+  features->callback([options]() { print_features(*options); });
+}
+
+}  // namespace rsw::tools

@@ -1,0 +1,35 @@
+// `rsw study` and `rsw features`: studies of the forward model and features of measured
+// signal files from the command line (docs/STUDIES.md).
+//   rsw study run STUDY [--workers N] [--resume] [--task i/n] [--timeout S] [-o DIR]
+//   rsw study merge STUDY PART.h5... [-o DIR]
+//   rsw study sensitivity STUDY [-o DIR]
+//   rsw study show STUDY            the resolved study file and its design size
+//   rsw study schema [--format markdown|json]
+//   rsw features FILE [-o JSON]
+// Study files and their `--set key=value` overrides are checked by calibration/study.hpp
+// (errors propagate as rsw::fem::ConfigError); farm and signal errors propagate as
+// their own exceptions for main() to report.
+#pragma once
+
+#include "calibration/forward_model.hpp"
+#include "calibration/study.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include <functional>
+#include <memory>
+
+namespace rsw::tools {
+
+// Builds the forward model of a study: θ (the study's parameters) → its features.
+using ForwardModelFactory =
+    std::function<std::unique_ptr<calibration::ForwardModel>(const calibration::Study&)>;
+
+// Adds `study` with run, merge, sensitivity, show and schema. `model_factory` is called
+// once per `study run`, before the worker processes start.
+void add_study_commands(CLI::App& app, ForwardModelFactory model_factory);
+
+// Adds `features FILE [-o JSON]`: the features of MODEL.md §10 of a signal file.
+void add_features_command(CLI::App& app);
+
+}  // namespace rsw::tools
