@@ -92,9 +92,15 @@ void CellValues::reinit(const Mesh& mesh, int cell) {
       x += N_[q][a] * xa;
     }
     const double det = J.determinant();
-    if (!(det > 0))
-      throw std::runtime_error("cell " + std::to_string(cell) + " has a non-positive Jacobian (" +
-                               std::to_string(det) + ") at a quadrature point");
+    if (!(det > 0)) {
+      Point centre = Point::Zero();
+      for (int a = 0; a < 4; ++a) centre += 0.25 * mesh.nodes[c[a]];
+      const std::string body =
+          mesh.cell_body.empty() ? std::string("?") : mesh.body_names.at(mesh.cell_body[cell]);
+      throw std::runtime_error("cell " + std::to_string(cell) + " of body " + body + " at (r, z) = (" +
+                               std::to_string(centre.x() * 1e3) + ", " + std::to_string(centre.y() * 1e3) +
+                               ") mm is inverted (Jacobian " + std::to_string(det) + " at a quadrature point)");
+    }
     const Eigen::Matrix2d J_inv_T = J.inverse().transpose();
     for (int a = 0; a < 4; ++a) grad_[q][a] = J_inv_T * grad_ref_[q][a];
     x_[q] = x;

@@ -17,9 +17,11 @@
 // the same coupling nodes as the mechanics pairing. Weak form:
 //     Σ_cells ∫ σ ∇φ·∇v dV + Σ_points h_e (φ_s − φ_m)(v_s − v_m) A = I v(V)
 // The system is linear and symmetric positive definite for a given T and contact
-// state: one CHOLMOD factorisation per solve, the symbolic analysis reused. It is
-// solved for a unit current and scaled by I, so R = V/I is defined even at I = 0 (the
-// resistance of a linear conductor does not depend on the current).
+// state: one CHOLMOD factorisation per solve, the symbolic analysis reused; the
+// Gauss-point geometry is kept while the node positions do not change (the coupling
+// iterations of a step). It is solved for a unit current and scaled by I, so
+// R = V/I is defined even at I = 0 (the resistance of a linear conductor does not
+// depend on the current).
 //
 // Outputs: nodal φ, V, dynamic resistance R = V/I and, for configurable probe pairs,
 // the potential difference between two material points (located in the undeformed

@@ -70,7 +70,7 @@ struct MechanicsSettings {
   // Force-controlled steps never use it.
   double seating_stiffness = 1e3;
   int max_iterations = 40;
-  double residual_tolerance = 1e-8;       // relative to the load scale
+  double residual_tolerance = 1e-7;       // relative to the load scale
   double displacement_tolerance = 1e-13;  // m, on the Newton correction
   int n_gauss = 2;
   bool verbose = false;                   // print Newton iterations to stderr (also RSW_VERBOSE=1)

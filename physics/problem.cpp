@@ -236,11 +236,11 @@ ConfigSchema build_schema() {
   s.number("solver.contact_smoothing", "m", "nm").default_value("10 nm")
       .range(Range::closed(0, 1e4))
       .doc("Width of the quadratic start of the C1 penalty contact law.");
-  s.number("solver.coupling_tolerance", "degC", "degC").default_value("1e-3 degC")
+  s.number("solver.coupling_tolerance", "degC", "degC").default_value("1e-2 degC")
       .range(Range::closed(1e-9, 10))
       .doc("Electro-thermal coupling iterations stop when no nodal temperature changes by "
            "more than this between iterations.");
-  s.integer("solver.max_coupling_iterations").default_value("30")
+  s.integer("solver.max_coupling_iterations").default_value("60")
       .range(Range::closed(1, 1000))
       .doc("Cap on the electro-thermal coupling iterations of one time step; reaching it "
            "fails the run with the step named.");

@@ -67,9 +67,8 @@ struct Thermal::Impl {
   Eigen::VectorXd T_previous;          // °C, the committed field before T_old
   double previous_dt = 0;              // s, the step that led to T_old (0: none)
   Eigen::VectorXd H, dH, H_old;        // J/kg and J/(kg K), nodal
-  std::vector<char> melt_state;        // per cell Gauss point: T ≥ T_melting (sharp switch)
-  bool sharp_switch = false;           // some cell switches to λ_m without a blend band
-  bool update_switch = false;
+  std::vector<char> melt_state;        // per cell Gauss point: k = λ_m this step (sharp switch)
+  std::vector<double> conductivity_q;  // k per cell Gauss point, at the solve's starting field
   bool new_step = true;
   contact::BondingState bonding, trial_bonding;
   std::vector<std::vector<double>> conductance;  // per pairing point, last evaluation
@@ -97,7 +96,7 @@ struct Thermal::Impl {
         n_q(s.n_gauss * s.n_gauss),
         dofs(m, 1),
         constraints(dofs.n_dofs()),
-        solver(s.exact_tangent ? fem::SolverKind::klu : fem::SolverKind::cholmod) {
+        solver(fem::SolverKind::cholmod) {
     if (std::getenv("RSW_VERBOSE")) settings.verbose = true;
     if (s.n_gauss < 1 || s.n_gauss > 3) throw std::invalid_argument("Thermal: n_gauss must be 1, 2 or 3");
     if (static_cast<int>(body_material.size()) != mesh.n_bodies())
@@ -110,7 +109,6 @@ struct Thermal::Impl {
       melt_switch_cell.push_back(s.melt_conductivity > 0 && mesh.body_names[b].rfind(s.melt_conductivity_prefix, 0) == 0);
     }
     for (int n = 0; n < mesh.n_nodes(); ++n) node_material.push_back(body_material[mesh.node_body[n]]);
-    sharp_switch = s.melt_smoothing <= 0 && std::find(melt_switch_cell.begin(), melt_switch_cell.end(), 1) != melt_switch_cell.end();
 
     constraints.add_hanging_nodes(mesh, dofs);
     for (const auto& [name, value] : s.fixed_temperatures) {
@@ -170,6 +168,7 @@ struct Thermal::Impl {
       fixed_weight[h.node] = 0.5 * (fixed_weight[h.parents[0]] + fixed_weight[h.parents[1]]);
 
     melt_state.assign(static_cast<std::size_t>(mesh.n_cells()) * n_q, 0);
+    conductivity_q.assign(melt_state.size(), 0.0);
     JxW.assign(melt_state.size(), 0.0);
     grad.assign(4 * melt_state.size(), Eigen::Vector2d::Zero());
     for (int q = 0; q < n_q; ++q) shape.push_back({cv.N(q, 0), cv.N(q, 1), cv.N(q, 2), cv.N(q, 3)});
@@ -209,21 +208,45 @@ struct Thermal::Impl {
       throw std::invalid_argument("Thermal: interface heat must have one list per interface");
   }
 
-  // k(T) with the λ_m switch of paper eq. 3, and dk/dT.
-  materials::PropertyValue conductivity(int e, int q, double temperature) {
-    const materials::Material& mat = *cell_material[e];
-    const materials::PropertyValue table = mat.thermal_conductivity(temperature);
-    if (!melt_switch_cell[e]) return table;
-    const double lambda_m = settings.melt_conductivity;
-    const double T_m = mat.melting_temperature();
-    if (settings.melt_smoothing > 0) {
-      const materials::PropertyValue w = materials::smoothstep(temperature, T_m - settings.melt_smoothing, T_m);
-      return {(1 - w.value) * table.value + w.value * lambda_m,
-              (1 - w.value) * table.slope + w.slope * (lambda_m - table.value)};
+  // The λ_m switch states of paper eq. 3 for the step, at the field T (the step's
+  // starting iterate): k = λ_m at the Gauss points of the sheet bodies at or above
+  // T_melting.
+  void update_melt_states() {
+    for (int e = 0; e < mesh.n_cells(); ++e) {
+      if (!melt_switch_cell[e]) continue;
+      const auto& c = mesh.cells[e];
+      const double T_m = cell_material[e]->melting_temperature();
+      for (int q = 0; q < n_q; ++q) {
+        double Tq = 0;
+        for (int a = 0; a < 4; ++a) Tq += shape[q][a] * T[c[a]];
+        melt_state[static_cast<std::size_t>(e) * n_q + q] = Tq >= T_m;
+      }
     }
-    char& state = melt_state[static_cast<std::size_t>(e) * n_q + q];
-    if (update_switch) state = temperature >= T_m;
-    return state ? materials::PropertyValue{lambda_m, 0.0} : table;
+  }
+
+  // k at every cell Gauss point for the field T: the table, or λ_m where the step's
+  // switch state says so, or the C¹ blend of a smoothing band.
+  void update_conductivities() {
+    const double lambda_m = settings.melt_conductivity;
+    for (int e = 0; e < mesh.n_cells(); ++e) {
+      const auto& c = mesh.cells[e];
+      const materials::Material& mat = *cell_material[e];
+      const double T_m = mat.melting_temperature();
+      for (int q = 0; q < n_q; ++q) {
+        const std::size_t k = static_cast<std::size_t>(e) * n_q + q;
+        double Tq = 0;
+        for (int a = 0; a < 4; ++a) Tq += shape[q][a] * T[c[a]];
+        const double table = mat.thermal_conductivity(Tq).value;
+        if (!melt_switch_cell[e]) {
+          conductivity_q[k] = table;
+        } else if (settings.melt_smoothing > 0) {
+          const double w = materials::smoothstep(Tq, T_m - settings.melt_smoothing, T_m).value;
+          conductivity_q[k] = (1 - w) * table + w * lambda_m;
+        } else {
+          conductivity_q[k] = melt_state[k] ? lambda_m : table;
+        }
+      }
+    }
   }
 
   // Gauss-point geometry (∇N, JxW) of every cell for the node positions; kept while
@@ -261,24 +284,19 @@ struct Thermal::Impl {
       const std::size_t k = static_cast<std::size_t>(e) * n_q + q;
       const Eigen::Vector2d* g = &grad[4 * k];
       const std::array<double, 4>& N = shape[q];
-      double Tq = 0;
       Eigen::Vector2d grad_T = Eigen::Vector2d::Zero();
+      for (int a = 0; a < 4; ++a) grad_T += Tc[a] * g[a];
+      const double kw = conductivity_q[k] * JxW[k];
+      const double qw = (joule->empty() ? 0.0 : (*joule)[k]) * JxW[k];
       for (int a = 0; a < 4; ++a) {
-        Tq += N[a] * Tc[a];
-        grad_T += Tc[a] * g[a];
-      }
-      const materials::PropertyValue kq = conductivity(e, q, Tq);
-      const double k_slope = settings.exact_tangent ? kq.slope : 0.0;
-      const double q_v = joule->empty() ? 0.0 : (*joule)[k];
-      const double w = JxW[k];
-      for (int a = 0; a < 4; ++a) {
-        const double flux_a = grad_T.dot(g[a]);
-        Re[a] += (kq.value * flux_a - q_v * N[a]) * w;  // k ∇T·∇N_a − q_v N_a
+        Re[a] += kw * grad_T.dot(g[a]) - qw * N[a];  // k ∇T·∇N_a − q_v N_a
         if (matrix)
-          for (int b = 0; b < 4; ++b)                    // k ∇N_b·∇N_a + k' N_b ∇T·∇N_a
-            Ke(a, b) += (kq.value * g[b].dot(g[a]) + k_slope * N[b] * flux_a) * w;
+          for (int b = a; b < 4; ++b) Ke(a, b) += kw * g[b].dot(g[a]);  // k ∇N_b·∇N_a
       }
     }
+    if (matrix)
+      for (int a = 0; a < 4; ++a)
+        for (int b = 0; b < a; ++b) Ke(a, b) = Ke(b, a);
     local.matrix += Ke;
     local.vector -= Re;
   }
@@ -512,6 +530,7 @@ ThermalStepReport Thermal::solve(double dt, const std::vector<fem::Point>& posit
   // A new step factorises afresh; further calls of the step (staggered coupling)
   // start from the step's last factorisation.
   bool refactor = m.new_step || !m.factorized;
+  const bool first_solve_of_step = m.new_step;
   if (m.new_step) {
     m.T = m.T_old;
     // Predictor: linear extrapolation of the last two committed fields.
@@ -520,14 +539,14 @@ ThermalStepReport Thermal::solve(double dt, const std::vector<fem::Point>& posit
   // Fixed values and hanging nodes exactly satisfied; Newton corrections keep them.
   m.T = m.constraints.distribute(m.constraints.restrict_to_free(m.T));
   m.new_step = false;
+  // Coefficients at the starting field: the λ_m switch once per step, k and h per solve.
+  if (first_solve_of_step) m.update_melt_states();
+  m.update_conductivities();
+  m.interface_conductances();
 
   ThermalStepReport report;
   const double tolerance = m.settings.temperature_tolerance;
-  m.interface_conductances();
-  m.update_switch = m.sharp_switch;  // λ_m switch states at the starting iterate
   m.evaluate(refactor);
-  m.update_switch = m.sharp_switch && m.settings.switch_iterations > 0;
-  std::vector<char> previous_states;
   double previous_norm = 0;
   for (int it = 1; it <= m.settings.max_iterations; ++it) {
     report.iterations = it;
@@ -554,7 +573,6 @@ ThermalStepReport Thermal::solve(double dt, const std::vector<fem::Point>& posit
     // melting range can make full Newton steps cycle); small steps are taken whole.
     const Eigen::VectorXd base = m.T;
     const double norm0 = m.F.norm();
-    if (m.update_switch) previous_states = m.melt_state;
     double alpha = 1.0;
     for (int ls = 0; ls < 8; ++ls) {
       m.T = base + alpha * step;
@@ -577,11 +595,7 @@ ThermalStepReport Thermal::solve(double dt, const std::vector<fem::Point>& posit
                    1e3 * m.current.nodes[worst].y(), m.T[worst], alpha, m.F.lpNorm<Eigen::Infinity>(),
                    report.factorizations);
     }
-    // A step that changed switch states leaves a residual the step did not see.
-    const bool switched = m.update_switch && previous_states != m.melt_state;
-    // Freeze the switch states; K and F already belong to the frozen states.
-    if (it >= m.settings.switch_iterations) m.update_switch = false;
-    if (alpha == 1.0 && step_norm <= tolerance && !switched) {
+    if (alpha == 1.0 && step_norm <= tolerance) {
       report.converged = true;
       break;
     }
@@ -589,7 +603,6 @@ ThermalStepReport Thermal::solve(double dt, const std::vector<fem::Point>& posit
   if (!report.converged)
     report.message = "Newton did not converge in " + std::to_string(m.settings.max_iterations) +
                      " iterations (last correction " + std::to_string(report.correction) + " K)";
-  m.update_switch = false;
   m.account();
   m.update_bonding();
   return report;
@@ -619,6 +632,46 @@ Eigen::VectorXd Thermal::liquid_fraction() const {
 }
 
 const ThermalEnergy& Thermal::energy() const { return impl_->energy; }
+
+void Thermal::residual_and_tangent(double dt, const std::vector<fem::Point>& positions,
+                                   const contact::ContactState& contact, const std::vector<double>& joule_heat,
+                                   const std::vector<std::vector<double>>& interface_heat,
+                                   const Eigen::VectorXd& reference, const Eigen::VectorXd& reduced,
+                                   Eigen::VectorXd& residual, Eigen::SparseMatrix<double>& tangent) {
+  Impl& m = *impl_;
+  m.check_inputs(contact, joule_heat, interface_heat);
+  m.update_geometry(positions);
+  m.dt = dt;
+  m.contact = &contact;
+  m.joule = &joule_heat;
+  m.interface_heat = &interface_heat;
+  // The solver's state is left as it was.
+  const Eigen::VectorXd saved_T = m.T;
+  const std::vector<char> saved_states = m.melt_state;
+  const std::vector<double> saved_k = m.conductivity_q;
+  const std::vector<std::vector<double>> saved_h = m.conductance;
+  m.T = reference;
+  m.update_melt_states();
+  m.update_conductivities();
+  m.interface_conductances();
+  m.T = m.constraints.distribute(reduced);
+  m.evaluate(true);
+  residual = -m.F;
+  tangent = m.K;
+  m.T = saved_T;
+  m.melt_state = saved_states;
+  m.conductivity_q = saved_k;
+  m.conductance = saved_h;
+  m.factorized = false;  // K now holds the tangent at `reduced`
+}
+
+Eigen::VectorXd Thermal::free_values(const Eigen::VectorXd& nodal_temperature) const {
+  return impl_->constraints.restrict_to_free(nodal_temperature);
+}
+
+Eigen::VectorXd Thermal::nodal_values(const Eigen::VectorXd& free) const {
+  return impl_->constraints.distribute(free);
+}
 const contact::BondingState& Thermal::bonding() const { return impl_->bonding; }
 const std::vector<std::vector<double>>& Thermal::interface_conductance() const { return impl_->conductance; }
 

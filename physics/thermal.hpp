@@ -17,18 +17,22 @@
 //   at and above T_melting (paper eq. 3, λ_m = thermal.melt_conductivity), switched
 //   per Gauss point. An optional band of width δ below T_melting blends the two C¹
 //   (k = (1 − w) k_table + w λ_m, w = smoothstep(T; T_m − δ, T_m)); δ = 0 (default)
-//   is the paper's switch. A sharp switch makes the residual discontinuous, so the
-//   switch states are taken at the iterate a solve starts from, updated during the
-//   first `switch_iterations` Newton iterations and then frozen: Newton converges on
-//   the frozen (smooth) problem. Repeated solves of one step (staggered coupling)
-//   start from the previous result, so the states settle with the coupling.
-// - Newton: the tangent holds the capacity M_a H'(T_a)/Δt, conduction k ∇N·∇N,
-//   convection and the interface conductances; by default the term of dk/dT is left
-//   out, which keeps it symmetric (CHOLMOD, about half the cost of an unsymmetric
-//   factorisation) at a linear convergence rate of a few per cent for the steel and
-//   copper tables; `exact_tangent` adds it (KLU), recommended with a smoothing band,
-//   whose dk/dT is steep. A backtracking line search on |R| guards the large
-//   corrections (the S-shaped enthalpy of a melting range can make full steps
+//   is the paper's switch. The sharp switch states are set once per step, at the
+//   step's predicted field (our choice): a state that flipped between the iterations
+//   of one step could keep a Gauss point near T_melting cycling between λ_m and the
+//   table, and no iteration would settle.
+// - Coefficients (our choice): each solve evaluates k(T) at the cell Gauss points
+//   and the interface conductances h at the field it starts from; within the solve
+//   only the enthalpy is nonlinear. Like σ(T) of the electrical field, k and h are
+//   brought up to date by the staggered coupling iterations of a step (a fixed point
+//   of those iterations is the fully implicit solution). Implicit k(T) and h(T_i)
+//   made Newton stall on the weld: h falls steeply near the solidus, where σ_d drops
+//   to the strength floor, and the kinks of the piecewise-linear k and σ_d tables
+//   trap the iterates; the flux stays conservative either way.
+// - Newton: the tangent is exact for the solve's problem and symmetric (capacity
+//   M_a H'(T_a)/Δt, conduction k ∇N·∇N, convection, interface conductances;
+//   CHOLMOD, symbolic analysis reused). A backtracking line search on |R| guards the
+//   large corrections (the S-shaped enthalpy of a melting range can make full steps
 //   cycle). Corrections below `chord_threshold` reuse the step's last factorisation
 //   while they shrink fourfold per iteration. The iteration ends when a full
 //   correction is below `temperature_tolerance` (∞-norm). Each step starts from the
@@ -41,12 +45,7 @@
 //   released half on each side, distributed with the side's interpolation weights.
 // - Interfaces: at every paired point the flux h (T_s − T_m) with h = HTC(F_n, T_i)
 //   χ(g) (paper eq. 2 times the C¹ closure factor, contact/interface_laws.hpp), or
-//   the bonded conductance at bonded S/S points (perfect thermal contact). Each solve
-//   evaluates h once, at the temperature it starts from (our choice): h varies
-//   steeply with T near the solidus, where σ_d falls to the strength floor, and the
-//   kinks of the σ_d and k tables make Newton cycle when h(T_i) is implicit. Like
-//   σ(T) of the electrical field, h is brought up to date by the staggered coupling
-//   iterations of a step; the flux stays conservative either way.
+//   the bonded conductance at bonded S/S points (perfect thermal contact).
 // - Boundaries: water cooling q = h_w (T − T_w) on every "*.cooling_bore"; air
 //   q = h_air (T − T_amb) on every other named outer boundary except the axis
 //   ("*.axis", symmetry) and the electrode end faces ("*.end_face", adiabatic: the
@@ -76,6 +75,7 @@
 #include "physics/problem.hpp"
 
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
 
 #include <memory>
 #include <string>
@@ -100,20 +100,14 @@ struct ThermalSettings {
   double melt_conductivity = 0.0;     // W/(m·K), λ_m; <= 0 keeps the tables everywhere
   std::string melt_conductivity_prefix = "sheet_";  // bodies whose k switches to λ_m
   double melt_smoothing = 0.0;        // K, blend band below T_melting (0: sharp switch)
-  // Newton iterations after the first evaluation that may still change the sharp
-  // switch states (0: the states of the starting iterate are kept for the solve).
-  int switch_iterations = 1;
   int max_iterations = 40;
   // K, ∞-norm of a full Newton correction that ends the iteration: the field is then
-  // within ~10⁻⁵ K of the discrete solution (linear rate of a few per cent), and the
-  // energy balance of a weld step closes to ~10⁻⁹ of the step's Joule heat.
+  // within ~10⁻⁵ K of the solve's discrete solution (chord steps contract fourfold at
+  // least), and the energy balance of a weld step closes to ~10⁻⁹ of its Joule heat.
   double temperature_tolerance = 1e-4;
   // Each step starts from the linear extrapolation of the last two committed fields
   // (from the committed field if false or at the first step).
   bool extrapolate = true;
-  // Exact Newton tangent (with the dk/dT term: unsymmetric, KLU) or its symmetric
-  // part only (CHOLMOD; converges linearly where k varies steeply with T).
-  bool exact_tangent = false;
   // K: Newton corrections below this reuse the last factorisation of the step (chord
   // steps) as long as they shrink at least fourfold per iteration.
   double chord_threshold = 1.0;
@@ -173,6 +167,19 @@ class Thermal {
   const contact::BondingState& bonding() const;          // committed
   // h at every pairing point of the last solve (HTC·χ, or bonded), W/(m²K).
   const std::vector<std::vector<double>>& interface_conductance() const;
+
+  // For finite-difference checks of the Newton tangent: the reduced residual R and
+  // ∂R/∂T of a step of length dt from the committed field, at the free values
+  // `reduced` (the field is expanded through the constraints). The coefficients (k,
+  // h, λ_m switch states) are taken at `reference` (a full nodal field), as a solve
+  // starting there would.
+  void residual_and_tangent(double dt, const std::vector<fem::Point>& positions, const contact::ContactState& contact,
+                            const std::vector<double>& joule_heat,
+                            const std::vector<std::vector<double>>& interface_heat, const Eigen::VectorXd& reference,
+                            const Eigen::VectorXd& reduced, Eigen::VectorXd& residual, Eigen::SparseMatrix<double>& tangent);
+  // The free values of a full nodal field, and the full field of free values.
+  Eigen::VectorXd free_values(const Eigen::VectorXd& nodal_temperature) const;
+  Eigen::VectorXd nodal_values(const Eigen::VectorXd& free) const;
 
  private:
   struct Impl;

@@ -433,12 +433,30 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
       mech.set_bonded(flags);
     }
     clock.start("mechanics");
-    const auto report = mech.solve_force_step(problem.schedule.force.at(t), T_iter);
-    result.n_newton_iterations += report.iterations;
-    if (!report.converged)
-      return fail("weld stage, step " + std::to_string(k) + " (t = " + std::to_string(t * 1e3) +
-                  " ms), mechanics: " + report.message);
-    mech.commit();
+    // The mechanics follows the temperature and force changes of the step; where
+    // Newton fails (the first melting makes the material collapse within a step) the
+    // failed part is halved, down to 1/32 of the step, with linearly interpolated
+    // temperature and force. Steps that converge are never subdivided.
+    {
+      const Eigen::VectorXd T_start = thermal.committed_temperature();
+      const double F_start = problem.schedule.force.at(times[k - 1]), F_end = problem.schedule.force.at(t);
+      MechanicsStepReport report;
+      std::function<bool(double, double, int)> advance = [&](double s0, double s1, int depth) {
+        report = mech.solve_force_step(F_start + s1 * (F_end - F_start), T_start + s1 * (T_iter - T_start));
+        result.n_newton_iterations += report.iterations;
+        if (report.converged) {
+          mech.commit();
+          return true;
+        }
+        if (depth == 5) return false;
+        ++result.n_mechanics_substepped;
+        const double mid = 0.5 * (s0 + s1);
+        return advance(s0, mid, depth + 1) && advance(mid, s1, depth + 1);
+      };
+      if (!advance(0.0, 1.0, 0))
+        return fail("weld stage, step " + std::to_string(k) + " (t = " + std::to_string(t * 1e3) +
+                    " ms), mechanics (also in sub-steps of 1/32 step): " + report.message);
+    }
     thermal.commit();
 
     if (std::abs(t - current_end) < 1e-12)
@@ -547,6 +565,7 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
     j["weld_steps"] = result.n_steps;
     j["newton_iterations"] = result.n_newton_iterations;
     j["coupling_iterations"] = result.n_coupling_iterations;
+    j["mechanics_substep_splits"] = result.n_mechanics_substepped;
     for (const auto& [name, value] : result.nugget) j["nugget"][name] = value;
     for (const auto& [name, value] : result.energy) j["energy_J"][name] = value;
     const int r_col = sig.column("resistance");

@@ -1,6 +1,8 @@
 // The rsw command-line program: one binary with subcommands.
 //   rsw simulate CASE [-o DIR] [--set key=value ...]   run a weld case
 //   rsw mesh CASE [-o DIR] [--set key=value ...]   build and write the meshes
+//   rsw study run|merge|sensitivity|show|schema ... parameter studies (docs/STUDIES.md)
+//   rsw features FILE [-o JSON]                    features of a signal file
 //   rsw config schema [--format markdown|json]     every config key, documented
 //   rsw config show CASE [--set key=value ...]     the resolved case
 // Errors in the input end the program with exit code 2 and a message naming the
@@ -9,6 +11,8 @@
 #include "tools/config_commands.hpp"
 #include "tools/mesh_command.hpp"
 #include "tools/simulate_command.hpp"
+#include "tools/study_commands.hpp"
+#include "tools/weld_model.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -40,6 +44,8 @@ int main(int argc, char** argv) {
   });
   rsw::tools::add_mesh_command(app);
   rsw::tools::add_simulate_command(app);
+  rsw::tools::add_study_commands(app, rsw::tools::make_weld_model);
+  rsw::tools::add_features_command(app);
   add_config_commands(app);
   try {
     app.parse(argc, argv);

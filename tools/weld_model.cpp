@@ -1,0 +1,84 @@
+// WeldForwardModel: study parameters → weld case → run_weld → features; see weld_model.hpp.
+#include "tools/weld_model.hpp"
+
+#include "calibration/features.hpp"
+#include "calibration/signal.hpp"
+#include "fem/config.hpp"
+#include "fem/units.hpp"
+#include "physics/problem.hpp"
+#include "physics/weld_simulation.hpp"
+
+#include <cstdlib>
+#include <filesystem>
+#include <unistd.h>
+
+namespace rsw::tools {
+
+namespace fs = std::filesystem;
+
+WeldForwardModel::WeldForwardModel(const calibration::Study& study)
+    : case_file_(study.case_file().string()), overrides_(study.model_overrides()),
+      feature_names_(study.feature_names()) {
+  const fem::ConfigSchema schema = physics::weld_case_schema();
+  const auto& space = study.parameter_space();
+  for (std::size_t i = 0; i < space.n_parameters(); ++i) {
+    const auto& p = space.parameter(i);
+    const fem::KeySpec* key = schema.find(p.config_key);
+    if (!key || key->kind != fem::KeyKind::number)
+      throw fem::ConfigError(study.file().string() + ": parameter '" + p.name + "': config key '" + p.config_key +
+                             "' is not a number key of the weld case; see docs/CONFIG.md");
+    if (!fem::units_convertible(p.unit, key->unit))
+      throw fem::ConfigError(study.file().string() + ": parameter '" + p.name + "': unit '" + p.unit +
+                             "' does not convert to the unit '" + key->unit + "' of '" + p.config_key + "'");
+    parameter_names_.push_back(p.name);
+    config_keys_.push_back(p.config_key);
+    parameter_units_.push_back(p.unit);
+    key_units_.push_back(key->unit);
+  }
+}
+
+std::vector<std::string> WeldForwardModel::parameter_names() const { return parameter_names_; }
+std::vector<std::string> WeldForwardModel::feature_names() const { return feature_names_; }
+
+calibration::EvaluationResult WeldForwardModel::evaluate(const Eigen::VectorXd& theta) const {
+  fs::path dir;
+  try {
+    fem::Config config = fem::load_config(physics::weld_case_schema(), case_file_, overrides_);
+    for (std::size_t i = 0; i < config_keys_.size(); ++i)
+      config.set_number(config_keys_[i], fem::convert_units(theta[i], parameter_units_[i], key_units_[i]),
+                        "study parameter " + parameter_names_[i]);
+    physics::Problem problem = physics::make_problem(config);
+    problem.output.fields = false;
+    char tmpl[] = "/tmp/rsw-run-XXXXXX";
+    if (!mkdtemp(tmpl)) return calibration::EvaluationResult::failure("cannot create a temporary folder");
+    dir = tmpl;
+    const auto run = physics::run_weld(problem, dir / "run");
+    if (!run.success) {
+      fs::remove_all(dir);
+      return calibration::EvaluationResult::failure(run.message);
+    }
+    const auto& s = run.signals;
+    const auto column = [&](const std::string& name) {
+      const auto& v = s.columns.at(s.column(name));
+      return Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size())).eval();
+    };
+    calibration::Signal signal(column("time"));
+    signal.add_column("current", "A", column("current"));
+    signal.add_column("voltage", "V", column("voltage"));
+    signal.add_column("force", "N", column("force"));
+    signal.add_column("displacement", "m", column("displacement"));
+    signal.add_column("temperature", "degC", column("temperature"));
+    const auto features = calibration::extract_features(signal, {}, run.nugget);
+    fs::remove_all(dir);
+    return calibration::EvaluationResult::success(features.select(feature_names_));
+  } catch (const std::exception& e) {
+    if (!dir.empty()) fs::remove_all(dir);
+    return calibration::EvaluationResult::failure(e.what());
+  }
+}
+
+std::unique_ptr<calibration::ForwardModel> make_weld_model(const calibration::Study& study) {
+  return std::make_unique<WeldForwardModel>(study);
+}
+
+}  // namespace rsw::tools

@@ -1,0 +1,38 @@
+// The weld simulator as a calibration::ForwardModel: θ (physical values of a study's
+// parameters) → the study's features. Each evaluation loads the study's weld case
+// with its overrides, writes θ into the parameters' config keys, runs the weld
+// (physics::run_weld, no field files, in a private temporary folder), turns the
+// signals into a calibration::Signal and extracts the features with the same
+// extractor that reads measured signal files. A failed simulation or an undefined
+// feature is returned as a failure with its reason, never thrown.
+#pragma once
+
+#include "calibration/forward_model.hpp"
+#include "calibration/study.hpp"
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace rsw::tools {
+
+class WeldForwardModel : public calibration::ForwardModel {
+ public:
+  // Checks every parameter's config key (a number key of the weld schema whose unit
+  // converts from the parameter's) and every feature name; throws ConfigError.
+  explicit WeldForwardModel(const calibration::Study& study);
+
+  std::vector<std::string> parameter_names() const override;
+  std::vector<std::string> feature_names() const override;
+  calibration::EvaluationResult evaluate(const Eigen::VectorXd& theta) const override;
+
+ private:
+  std::string case_file_;
+  std::vector<std::string> overrides_;
+  std::vector<std::string> parameter_names_, config_keys_, parameter_units_, key_units_;
+  std::vector<std::string> feature_names_;
+};
+
+std::unique_ptr<calibration::ForwardModel> make_weld_model(const calibration::Study& study);
+
+}  // namespace rsw::tools
