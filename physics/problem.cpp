@@ -215,6 +215,11 @@ ConfigSchema build_schema() {
            "(paper eq. 3); prior uniform [35, 200] W/(m*K); default 117.5, the centre of the "
            "prior (the paper's nominal 35 is its lower bound).");
 
+  s.number("thermal.melt_conductivity_band", "K", "K").default_value("0 K")
+      .range(Range::closed(0, 200))
+      .doc("Width of a smooth blend from the conductivity table to lambda_m just below the "
+           "melting temperature; 0 is the paper's switch (eq. 3).");
+
   s.section("solver", "Numerical settings. None depends on the model parameters, so every "
                      "output stays a smooth function of them (fixed step schedule, fixed "
                      "tolerances).");
@@ -450,6 +455,7 @@ Problem make_problem(const Config& config) {
   thermal.air_htc = config.number("thermal.air_htc");
   thermal.ambient_temperature = config.number("thermal.ambient_temperature");
   thermal.melt_conductivity = config.number("thermal.melt_conductivity");
+  thermal.melt_conductivity_band = config.number("thermal.melt_conductivity_band");
 
   SolverSettings& solver = problem.solver;
   solver.time_step = config.number("solver.time_step");

@@ -59,6 +59,7 @@ struct ThermalParameters {
   double air_htc = 0;              // W/(m^2*K), other free surfaces
   double ambient_temperature = 0;  // degC
   double melt_conductivity = 0;    // W/(m*K), lambda_m of paper eq. 3
+  double melt_conductivity_band = 0;  // K, blend from the table to lambda_m below T_melting (0: switch)
 };
 
 struct SolverSettings {

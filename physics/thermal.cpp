@@ -33,6 +33,7 @@ ThermalSettings thermal_settings(const ThermalParameters& p) {
   s.air_htc = p.air_htc;
   s.ambient_temperature = p.ambient_temperature;
   s.melt_conductivity = p.melt_conductivity;
+  s.melt_smoothing = p.melt_conductivity_band;
   return s;
 }
 

@@ -1,0 +1,115 @@
+// The coupled weld as a user runs it (rsw simulate on the paper's case, coarse mesh):
+// a stored regression reference, the energy balance and readable outputs.
+#include "fem/hdf5_file.hpp"
+#include "fem/vtk_output.hpp"
+
+#include <nlohmann/json.hpp>
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <unistd.h>
+#include <vector>
+
+namespace fs = std::filesystem;
+
+namespace {
+const std::string paper_case = std::string(RSW_SOURCE_DIR) + "/validation/paper_case/weld.yaml";
+const std::string coarse =
+    " --set mesh.base_size=0.5mm --set mesh.weld_zone.levels=1 --set output.interval=10ms";
+
+int run_rsw(const std::string& args, std::string& output) {
+  const std::string cmd = std::string(RSW_BINARY) + " " + args + " 2>&1";
+  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
+  std::array<char, 4096> buf;
+  while (fgets(buf.data(), buf.size(), pipe.get())) output += buf.data();
+  return WEXITSTATUS(pclose(pipe.release()));
+}
+
+// Columns of a CSV with a header row ("name [unit]"); lines starting with # skipped.
+std::map<std::string, std::vector<double>> read_csv(const fs::path& path) {
+  std::ifstream in(path);
+  std::string line;
+  std::vector<std::string> names;
+  std::map<std::string, std::vector<double>> cols;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::stringstream ss(line);
+    std::string cell;
+    std::vector<std::string> cells;
+    while (std::getline(ss, cell, ',')) cells.push_back(cell);
+    if (names.empty()) {
+      names = cells;
+      continue;
+    }
+    for (std::size_t i = 0; i < cells.size() && i < names.size(); ++i)
+      cols[names[i]].push_back(cells[i] == "nan" ? std::nan("") : std::stod(cells[i]));
+  }
+  return cols;
+}
+
+// One coarse run of the paper case, shared by the tests below.
+const fs::path& coarse_run() {
+  static const fs::path dir = [] {
+    const fs::path d = fs::temp_directory_path() / ("rsw_weld_" + std::to_string(::getpid()));
+    fs::remove_all(d);
+    std::string out;
+    const int status = run_rsw("simulate " + paper_case + " -q -o " + d.string() + coarse, out);
+    if (status != 0) ADD_FAILURE() << out;
+    return d;
+  }();
+  return dir;
+}
+}  // namespace
+
+TEST(WeldRun, CoarseRunMatchesStoredReference) {
+  const auto run = read_csv(coarse_run() / "signals.csv");
+  const auto ref = read_csv(std::string(RSW_SOURCE_DIR) + "/tests/data/weld_coarse_reference.csv");
+  ASSERT_FALSE(ref.empty()) << "missing tests/data/weld_coarse_reference.csv (tools/regenerate_weld_reference.sh)";
+  for (const auto& [name, values] : ref) {
+    ASSERT_TRUE(run.count(name)) << name;
+    const auto& got = run.at(name);
+    ASSERT_EQ(got.size(), values.size()) << name;
+    double lo = 1e300, hi = -1e300;
+    for (double v : values) lo = std::min(lo, v), hi = std::max(hi, v);
+    const double tol = 1e-3 * std::max(hi - lo, 1e-300);
+    for (std::size_t i = 0; i < values.size(); ++i)
+      EXPECT_NEAR(got[i], values[i], tol) << name << " at row " << i
+                                          << " (regenerate only with tools/regenerate_weld_reference.sh)";
+  }
+}
+
+TEST(WeldRun, EnergyBalanceHoldsWithinOnePercent) {
+  std::ifstream in(coarse_run() / "summary.json");
+  ASSERT_TRUE(in);
+  const auto j = nlohmann::json::parse(in);
+  const auto& e = j.at("energy_J");
+  const double electrical = e.at("electrical"), stored = e.at("stored"), removed = e.at("removed");
+  std::printf("energy: electrical %.2f J = stored %.2f J + removed %.2f J (imbalance %.2e J); nugget holds %.1f %%\n",
+              electrical, stored, removed, electrical - stored - removed, 100.0 * e.at("nugget_fraction").get<double>());
+  EXPECT_GT(electrical, 0.0);
+  EXPECT_LT(std::abs(electrical - stored - removed), 0.01 * electrical);
+}
+
+TEST(WeldRun, FieldsOpenInVtkAndSignalsInHdf5) {
+  const auto steps = rsw::fem::read_pvd(coarse_run() / "fields.pvd");
+  ASSERT_EQ(steps.size(), 17u);  // 0, 10, ..., 160 ms
+  const auto last = rsw::fem::read_vtm(steps[10].file);
+  const auto& sheet = last.block("sheet_1");
+  for (const char* a : {"temperature", "potential", "peak_temperature", "liquid_fraction", "displacement"})
+    EXPECT_EQ(sheet.point_array(a).n_tuples(), sheet.n_points) << a;
+  for (const char* a : {"current_density", "joule_heat", "von_mises_stress", "equivalent_plastic_strain"})
+    EXPECT_EQ(sheet.cell_array(a).n_tuples(), sheet.n_cells) << a;
+  rsw::fem::Hdf5File h5(coarse_run() / "results.h5", rsw::fem::Hdf5Mode::read);
+  EXPECT_EQ(h5.read_doubles("/signals/voltage").size(), 17u);
+  EXPECT_GT(h5.read_doubles("/nugget/d_n_liq").at(0), 0.0);
+  std::string out;
+  EXPECT_EQ(std::system(("h5dump -H " + (coarse_run() / "results.h5").string() + " > /dev/null").c_str()), 0);
+}
