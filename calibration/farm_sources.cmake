@@ -1,5 +1,6 @@
-# Study sources of rsw_calibration: study files, the evaluation farm and the
-# sensitivity tables. Included by calibration/CMakeLists.txt; it only sets variables:
+# Study sources of rsw_calibration: study files, the evaluation farm, the sensitivity
+# tables and the calibration run (the study's calibration section, SBALC through the
+# farm). Included by calibration/CMakeLists.txt; it only sets variables:
 #   RSW_CALIBRATION_FARM_SOURCES  the .cpp files, absolute paths
 #   RSW_CALIBRATION_FARM_LIBS     link items (MPI::MPI_CXX when MPI is found)
 # MPI is optional: with Debian's libopenmpi-dev (tools/setup.sh) the farm can spread a
@@ -8,7 +9,9 @@
 set(RSW_CALIBRATION_FARM_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/farm.cpp
   ${CMAKE_CURRENT_LIST_DIR}/study.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/sensitivity.cpp)
+  ${CMAKE_CURRENT_LIST_DIR}/sensitivity.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/calibration_study.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/calibrate.cpp)
 set(RSW_CALIBRATION_FARM_LIBS rsw_fem)
 
 option(RSW_WITH_MPI "Run studies over MPI ranks when an MPI library is found" ON)

@@ -10,10 +10,16 @@
 //
 // Units: θ in the units of ParameterSpace (SI), features in SI (temperatures in °C),
 // both ordered as parameter_names() / feature_names().
+//
+// Optional extension, for posterior-predictive runs (rsw calibrate): a model that
+// produces time signals (the weld: current, voltage, displacement, ...) overrides
+// simulate_signals() to run at θ and write them into a folder; the default writes
+// nothing and reports that the model has no signals, so other models need nothing.
 #pragma once
 
 #include <Eigen/Core>
 
+#include <filesystem>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -57,6 +63,19 @@ class EvaluationResult {
   std::string failure_reason_;
 };
 
+// What simulate_signals() did: nothing (the model has no signals), wrote a signal file,
+// or failed with a reason.
+struct SignalOutput {
+  bool has_signals = false;           // false: the model produces no signals (the default)
+  bool ok = false;                    // the run succeeded and signal_file was written
+  std::filesystem::path signal_file;  // <folder>/signals.csv, one "name [unit]" per header column
+  std::string failure_reason;         // when has_signals && !ok
+
+  static SignalOutput none() { return {}; }
+  static SignalOutput written(std::filesystem::path file) { return {true, true, std::move(file), {}}; }
+  static SignalOutput failure(std::string reason) { return {true, false, {}, std::move(reason)}; }
+};
+
 class ForwardModel {
  public:
   virtual ~ForwardModel() = default;
@@ -69,6 +88,15 @@ class ForwardModel {
   // several threads at once; an implementation that cannot run concurrently must
   // serialise internally.
   virtual EvaluationResult evaluate(const Eigen::VectorXd& theta_physical) const = 0;
+
+  // Runs the model at θ (physical) and writes its signals as <folder>/signals.csv
+  // (comma-separated, a "name [unit]" header, rows in time order), and whatever else a
+  // run produces, into `folder` (created; an existing folder is replaced). Must not
+  // throw for a failed run. The default: no signals, nothing written.
+  virtual SignalOutput simulate_signals(const Eigen::VectorXd& theta_physical,
+                                        const std::filesystem::path& folder) const {
+    return SignalOutput::none();
+  }
 };
 
 }  // namespace rsw::calibration

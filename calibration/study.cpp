@@ -2,6 +2,7 @@
 // features, the model's case file), and the designs built from them; see study.hpp.
 #include "calibration/study.hpp"
 
+#include "calibration/calibration_study.hpp"
 #include "calibration/designs.hpp"
 #include "calibration/features.hpp"
 
@@ -27,7 +28,9 @@ using fem::Range;
 const char* const intro = R"(A study runs a design of experiments through the weld
 forward model: `rsw study run STUDY` evaluates every point (in parallel, resumable,
 failures recorded), `rsw study sensitivity STUDY` fits a sparse PCE per feature and
-writes Sobol indices. See docs/STUDIES.md for the workflow, MPI and array jobs.
+writes Sobol indices, `rsw calibrate STUDY` calibrates the parameters against the
+observations of the `calibration` section. See docs/STUDIES.md for the workflow, MPI
+and array jobs.
 
 Parameter values (bounds, mean, standard deviation, nominal) are quantities with a
 unit, such as `1e-4 mm` or `35 W/(m*K)`; a bare number is read in the parameter's
@@ -108,6 +111,8 @@ ConfigSchema build_schema() {
       .doc("Highest total degree of the candidate bases (paper: 5); at least min_degree.");
   s.number("sensitivity.q_norm", "1", "1").default_value("1").range(Range::open_closed(0, 1))
       .doc("q of the hyperbolic truncation (sum alpha_i^q)^(1/q) <= degree; 1: total degree.");
+
+  declare_calibration_keys(s);
   return s;
 }
 

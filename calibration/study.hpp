@@ -20,6 +20,8 @@
 //   model:      the weld-case file (relative to the study file) and extra config
 //               overrides for every run.
 //   sensitivity: degree range and q-norm of the sparse PCE (calibration/pce.hpp).
+//   calibration: observations, noise model, SBALC and posterior settings of
+//               `rsw calibrate` (declared and read by calibration/calibration_study.hpp).
 //
 // The design is built in the unit cube (calibration/designs.hpp) and mapped through the
 // priors' inverse CDFs (ParameterSpace), so θ is physical in each parameter's unit.

@@ -2,6 +2,7 @@
 //   rsw simulate CASE [-o DIR] [--set key=value ...]   run a weld case
 //   rsw mesh CASE [-o DIR] [--set key=value ...]   build and write the meshes
 //   rsw study run|merge|sensitivity|show|schema ... parameter studies (docs/STUDIES.md)
+//   rsw calibrate STUDY [--workers N] [--resume]   Bayesian calibration of a study's parameters
 //   rsw features FILE [-o JSON]                    features of a signal file
 //   rsw config schema [--format markdown|json]     every config key, documented
 //   rsw config show CASE [--set key=value ...]     the resolved case
@@ -9,6 +10,7 @@
 // file, line, key, value and what is allowed; other failures exit with code 1.
 #include "fem/config.hpp"
 #include "tools/config_commands.hpp"
+#include "tools/calibrate_command.hpp"
 #include "tools/mesh_command.hpp"
 #include "tools/simulate_command.hpp"
 #include "tools/study_commands.hpp"
@@ -45,6 +47,7 @@ int main(int argc, char** argv) {
   rsw::tools::add_mesh_command(app);
   rsw::tools::add_simulate_command(app);
   rsw::tools::add_study_commands(app, rsw::tools::make_weld_model);
+  rsw::tools::add_calibrate_command(app, rsw::tools::make_weld_model);
   rsw::tools::add_features_command(app);
   add_config_commands(app);
   try {

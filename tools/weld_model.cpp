@@ -40,14 +40,18 @@ WeldForwardModel::WeldForwardModel(const calibration::Study& study)
 std::vector<std::string> WeldForwardModel::parameter_names() const { return parameter_names_; }
 std::vector<std::string> WeldForwardModel::feature_names() const { return feature_names_; }
 
+fem::Config WeldForwardModel::config_at(const Eigen::VectorXd& theta) const {
+  fem::Config config = fem::load_config(physics::weld_case_schema(), case_file_, overrides_);
+  for (std::size_t i = 0; i < config_keys_.size(); ++i)
+    config.set_number(config_keys_[i], fem::convert_units(theta[i], parameter_units_[i], key_units_[i]),
+                      "study parameter " + parameter_names_[i]);
+  return config;
+}
+
 calibration::EvaluationResult WeldForwardModel::evaluate(const Eigen::VectorXd& theta) const {
   fs::path dir;
   try {
-    fem::Config config = fem::load_config(physics::weld_case_schema(), case_file_, overrides_);
-    for (std::size_t i = 0; i < config_keys_.size(); ++i)
-      config.set_number(config_keys_[i], fem::convert_units(theta[i], parameter_units_[i], key_units_[i]),
-                        "study parameter " + parameter_names_[i]);
-    physics::Problem problem = physics::make_problem(config);
+    physics::Problem problem = physics::make_problem(config_at(theta));
     problem.output.fields = false;
     char tmpl[] = "/tmp/rsw-run-XXXXXX";
     if (!mkdtemp(tmpl)) return calibration::EvaluationResult::failure("cannot create a temporary folder");
@@ -74,6 +78,20 @@ calibration::EvaluationResult WeldForwardModel::evaluate(const Eigen::VectorXd& 
   } catch (const std::exception& e) {
     if (!dir.empty()) fs::remove_all(dir);
     return calibration::EvaluationResult::failure(e.what());
+  }
+}
+
+calibration::SignalOutput WeldForwardModel::simulate_signals(const Eigen::VectorXd& theta,
+                                                             const fs::path& folder) const {
+  try {
+    physics::Problem problem = physics::make_problem(config_at(theta));
+    problem.output.fields = false;
+    if (folder.has_parent_path()) fs::create_directories(folder.parent_path());
+    const auto run = physics::run_weld(problem, folder);
+    if (!run.success) return calibration::SignalOutput::failure(run.message);
+    return calibration::SignalOutput::written(folder / "signals.csv");
+  } catch (const std::exception& e) {
+    return calibration::SignalOutput::failure(e.what());
   }
 }
 

@@ -5,10 +5,16 @@
 // signals into a calibration::Signal and extracts the features with the same
 // extractor that reads measured signal files. A failed simulation or an undefined
 // feature is returned as a failure with its reason, never thrown.
+//
+// For posterior-predictive runs (rsw calibrate), simulate_signals() runs the same
+// case at θ into a given folder and keeps what `rsw simulate` writes there
+// (signals.csv, results.h5, summary.json; no field files).
 #pragma once
 
 #include "calibration/forward_model.hpp"
 #include "calibration/study.hpp"
+
+#include "fem/config.hpp"
 
 #include <memory>
 #include <string>
@@ -25,8 +31,15 @@ class WeldForwardModel : public calibration::ForwardModel {
   std::vector<std::string> parameter_names() const override;
   std::vector<std::string> feature_names() const override;
   calibration::EvaluationResult evaluate(const Eigen::VectorXd& theta) const override;
+  // Writes <folder>/signals.csv (and results.h5, summary.json); a failed run leaves
+  // <folder>.partial/failure.txt and is returned as a failure.
+  calibration::SignalOutput simulate_signals(const Eigen::VectorXd& theta,
+                                             const std::filesystem::path& folder) const override;
 
  private:
+  // The case with its overrides and θ written into the parameters' keys.
+  fem::Config config_at(const Eigen::VectorXd& theta) const;
+
   std::string case_file_;
   std::vector<std::string> overrides_;
   std::vector<std::string> parameter_names_, config_keys_, parameter_units_, key_units_;

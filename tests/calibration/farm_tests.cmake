@@ -1,8 +1,8 @@
 # Tests of the evaluation farm, study files and sensitivity tables. Included by
 # tests/calibration/CMakeLists.txt.
-#   rsw_analytic           the `study` and `features` commands of rsw with analytic
-#                          forward models (analytic_models.hpp) in place of the weld
-#                          simulator; run by the MPI test here and by tests/tools.
+#   rsw_analytic           the `study`, `features` and `calibrate` commands of rsw with
+#                          analytic forward models (analytic_models.hpp) in place of the
+#                          weld simulator; run by the MPI test here and by tests/tools.
 #   test_calibration_farm  farm (kill/resume, failures, parallel, tasks, MPI), study
 #                          files, sensitivity. Unit tests take about a second each; the
 #                          Ishigami study is a verification test (a few seconds).
@@ -10,7 +10,8 @@ include(GoogleTest)
 
 add_executable(rsw_analytic
   ${CMAKE_CURRENT_LIST_DIR}/analytic_rsw_main.cpp
-  ${PROJECT_SOURCE_DIR}/tools/study_commands.cpp)
+  ${PROJECT_SOURCE_DIR}/tools/study_commands.cpp
+  ${PROJECT_SOURCE_DIR}/tools/calibrate_command.cpp)
 target_link_libraries(rsw_analytic PRIVATE rsw_calibration rsw_fem CLI11::CLI11)
 
 add_executable(test_calibration_farm
@@ -29,3 +30,16 @@ gtest_discover_tests(test_calibration_farm
 gtest_discover_tests(test_calibration_farm
   TEST_FILTER "*Ishigami*"
   PROPERTIES LABELS verification DISCOVERY_TIMEOUT 60)
+
+# The calibration run (SBALC through the farm, resume after a kill) and the calibration
+# section of study files. The linear-Gaussian evidence check is a verification test
+# (a few seconds); the rest are unit tests.
+add_executable(test_calibration_calibrate ${CMAKE_CURRENT_LIST_DIR}/test_calibrate.cpp)
+target_link_libraries(test_calibration_calibrate PRIVATE rsw_calibration rsw_fem GTest::gtest_main)
+target_compile_definitions(test_calibration_calibrate PRIVATE RSW_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+gtest_discover_tests(test_calibration_calibrate
+  TEST_FILTER "-*LinearGaussian*"
+  PROPERTIES LABELS unit ENVIRONMENT OMP_NUM_THREADS=1 DISCOVERY_TIMEOUT 60)
+gtest_discover_tests(test_calibration_calibrate
+  TEST_FILTER "*LinearGaussian*"
+  PROPERTIES LABELS verification ENVIRONMENT OMP_NUM_THREADS=1 DISCOVERY_TIMEOUT 60)

@@ -1,0 +1,335 @@
+// The calibration run: SBALC batches through the evaluation farm with a θ-keyed
+// evaluation cache, then the SIR posterior in physical units; see calibrate.hpp.
+#include "calibration/calibrate.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+#include <optional>
+#include <ostream>
+#include <regex>
+#include <sstream>
+#include <utility>
+
+namespace rsw::calibration {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+constexpr double not_a_number = std::numeric_limits<double>::quiet_NaN();
+
+// Thrown by the batch evaluator to stop the calibration. Sbalc::run() turns a
+// std::exception of its evaluator into failed evaluations and goes on; an error of the
+// farm (or an interrupt) must end the run instead, so this is deliberately not a
+// std::exception. It never leaves Calibration::run().
+struct AbortCalibration {
+  std::string message;
+  bool interrupted = false;
+};
+
+// A finished run found in the evaluation folder.
+struct CachedRun {
+  bool ok = false;
+  Eigen::VectorXd features;
+  std::string failure_reason;
+  double wall_time = 0.0;
+};
+
+using ThetaKey = std::vector<double>;
+
+ThetaKey key_of(const Eigen::VectorXd& theta) { return ThetaKey(theta.data(), theta.data() + theta.size()); }
+
+std::string four_digits(std::size_t n) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%04zu", n);
+  return text;
+}
+
+const std::regex& run_file_pattern() {
+  static const std::regex pattern(R"(runs_([0-9]+)\.h5)");
+  return pattern;
+}
+
+// The runs_NNNN.h5 files of the folder, by number.
+std::vector<std::pair<std::size_t, fs::path>> run_files(const fs::path& folder) {
+  std::vector<std::pair<std::size_t, fs::path>> files;
+  if (!fs::is_directory(folder)) return files;
+  for (const auto& entry : fs::directory_iterator(folder)) {
+    std::smatch match;
+    const std::string name = entry.path().filename().string();
+    if (std::regex_match(name, match, run_file_pattern())) {
+      files.emplace_back(static_cast<std::size_t>(std::stoull(match[1].str())), entry.path());
+    }
+  }
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+std::string format_theta(const ParameterSpace& parameters, const Eigen::VectorXd& theta) {
+  std::ostringstream text;
+  text.precision(4);
+  for (std::size_t i = 0; i < parameters.n_parameters(); ++i) {
+    text << (i ? ", " : "") << parameters.parameter(i).name << " = " << theta[static_cast<Eigen::Index>(i)];
+  }
+  return text.str();
+}
+
+// u → θ for the rows of a matrix.
+Eigen::MatrixXd rows_to_physical(const ParameterSpace& parameters, const Eigen::MatrixXd& unit_points) {
+  Eigen::MatrixXd physical(unit_points.rows(), unit_points.cols());
+  for (Eigen::Index r = 0; r < unit_points.rows(); ++r) {
+    physical.row(r) = unit_to_physical(parameters, unit_points.row(r).transpose()).transpose();
+  }
+  return physical;
+}
+
+}  // namespace
+
+Eigen::VectorXd unit_to_physical(const ParameterSpace& parameters, const Eigen::VectorXd& unit_point) {
+  constexpr double margin = 0x1.0p-53;
+  const Eigen::VectorXd inside = unit_point.cwiseMax(margin).cwiseMin(1.0 - margin);
+  Eigen::VectorXd clamped = unit_point;
+  const std::vector<StandardSpace> spaces = parameters.standard_spaces();
+  for (std::size_t i = 0; i < spaces.size(); ++i) {
+    if (spaces[i] == StandardSpace::standard_normal) clamped[static_cast<Eigen::Index>(i)] = inside[static_cast<Eigen::Index>(i)];
+  }
+  return parameters.to_physical(parameters.unit_to_standard(clamped));
+}
+
+Calibration::Calibration(const ForwardModel& model, StudyDesign design, GaussianLikelihood likelihood,
+                         CalibrationOptions options)
+    : model_(model), design_(std::move(design)), likelihood_(std::move(likelihood)), options_(std::move(options)) {
+  if (design_.parameters.n_parameters() == 0) throw CalibrationError("calibration: no parameters");
+  if (likelihood_.feature_names() != design_.feature_names) {
+    std::string observed, modelled;
+    for (const auto& name : likelihood_.feature_names()) observed += (observed.empty() ? "" : ", ") + name;
+    for (const auto& name : design_.feature_names) modelled += (modelled.empty() ? "" : ", ") + name;
+    throw CalibrationError("calibration '" + design_.name + "': the observed features (" + observed +
+                           ") differ from the model's (" + modelled + ")");
+  }
+  if (options_.evaluations_folder.empty()) throw CalibrationError("calibration: no evaluation folder");
+}
+
+CalibrationResult Calibration::run() const {
+  const Clock::time_point start = Clock::now();
+  const ParameterSpace& parameters = design_.parameters;
+  const std::size_t d = parameters.n_parameters();
+  const fs::path& folder = options_.evaluations_folder;
+  const bool resume = options_.farm.resume;
+
+  if (!resume && fs::exists(folder) && !fs::is_empty(folder)) {
+    throw CalibrationError("calibration folder '" + folder.string() +
+                           "' exists already; continue the calibration with --resume, or remove it to start again");
+  }
+  fs::create_directories(folder);
+
+  // The evaluation cache: every finished run of every earlier session.
+  std::map<ThetaKey, CachedRun> cache;
+  std::size_t next_file = 0;
+  for (const auto& [number, file] : run_files(folder)) {
+    next_file = std::max(next_file, number + 1);
+    if (!resume) continue;
+    StudyResults stored;
+    try {
+      stored = read_study_results(file);
+      StudyDesign probe = design_;
+      probe.points = stored.points;
+      check_same_design(stored, probe, file);
+    } catch (const FarmError& e) {
+      throw CalibrationError(std::string(e.what()) + "; the calibration folder '" + folder.string() +
+                             "' holds runs of another set-up: remove it to start again");
+    }
+    for (std::size_t i = 0; i < stored.n_points(); ++i) {
+      if (stored.status[i] == StudyResults::Status::pending) continue;
+      CachedRun run;
+      run.ok = stored.status[i] == StudyResults::Status::ok;
+      run.features = stored.features.row(static_cast<Eigen::Index>(i)).transpose();
+      run.failure_reason = stored.failure_reasons[i];
+      run.wall_time = stored.wall_time[static_cast<Eigen::Index>(i)];
+      cache.emplace(key_of(stored.points.row(static_cast<Eigen::Index>(i)).transpose()), std::move(run));
+    }
+  }
+
+  CalibrationResult result;
+  result.parameter_names = parameters.names();
+  for (std::size_t i = 0; i < d; ++i) result.parameter_units.push_back(parameters.parameter(i).unit);
+  result.feature_names = design_.feature_names;
+  std::size_t n_batches = 0;
+  double best_log_likelihood = -std::numeric_limits<double>::infinity();
+  Eigen::VectorXd best_theta;
+
+  const BatchLogLikelihoodFunction evaluate_batch =
+      [&](const std::vector<Eigen::VectorXd>& thetas_unit) -> std::vector<std::optional<double>> {
+    const std::size_t batch = n_batches++;
+    const Clock::time_point batch_start = Clock::now();
+    std::vector<CalibrationEvaluation> runs(thetas_unit.size());
+    std::vector<std::size_t> missing;
+    for (std::size_t k = 0; k < thetas_unit.size(); ++k) {
+      CalibrationEvaluation& run = runs[k];
+      run.batch = batch;
+      run.theta_unit = thetas_unit[k];
+      run.theta = unit_to_physical(parameters, thetas_unit[k]);
+      const auto cached = cache.find(key_of(run.theta));
+      if (cached == cache.end()) {
+        missing.push_back(k);
+        continue;
+      }
+      run.reused = true;
+      run.ok = cached->second.ok;
+      run.features = cached->second.features;
+      run.failure_reason = cached->second.failure_reason;
+      run.wall_time = cached->second.wall_time;
+    }
+
+    std::size_t n_workers = 0;
+    if (!missing.empty()) {
+      StudyDesign design = design_;
+      design.name = design_.name + "_runs_" + four_digits(next_file);
+      design.kind = "sbalc";
+      design.swept_parameter.clear();
+      design.points.resize(static_cast<Eigen::Index>(missing.size()), static_cast<Eigen::Index>(d));
+      for (std::size_t m = 0; m < missing.size(); ++m) {
+        design.points.row(static_cast<Eigen::Index>(m)) = runs[missing[m]].theta.transpose();
+      }
+      const fs::path file = folder / ("runs_" + four_digits(next_file++) + ".h5");
+      FarmOptions farm = options_.farm;
+      farm.resume = false;
+      farm.progress = nullptr;
+      farm.distribution = FarmDistribution::local;
+      FarmSummary summary;
+      StudyResults stored;
+      try {
+        summary = EvaluationFarm(model_, design, file, farm).run();
+        stored = read_study_results(file);
+      } catch (const std::exception& e) {
+        throw AbortCalibration{e.what(), false};
+      }
+      if (summary.interrupted) {
+        throw AbortCalibration{"calibration '" + design_.name + "' interrupted in batch " + std::to_string(batch) +
+                                   "; the finished runs are kept in " + folder.string(),
+                               true};
+      }
+      n_workers = summary.n_workers;
+      for (std::size_t m = 0; m < missing.size(); ++m) {
+        CalibrationEvaluation& run = runs[missing[m]];
+        run.ok = stored.status[m] == StudyResults::Status::ok;
+        run.features = stored.features.row(static_cast<Eigen::Index>(m)).transpose();
+        run.failure_reason = stored.failure_reasons[m];
+        run.wall_time = stored.wall_time[static_cast<Eigen::Index>(m)];
+        cache.emplace(key_of(run.theta), CachedRun{run.ok, run.features, run.failure_reason, run.wall_time});
+      }
+    }
+
+    std::vector<std::optional<double>> values;
+    std::size_t n_failed = 0;
+    for (CalibrationEvaluation& run : runs) {
+      run.log_likelihood = not_a_number;
+      if (run.ok) {
+        try {
+          run.log_likelihood = likelihood_.log_likelihood(run.features);
+        } catch (const std::invalid_argument& e) {
+          run.ok = false;
+          run.failure_reason = e.what();
+        }
+      }
+      if (run.ok) {
+        values.emplace_back(run.log_likelihood);
+        if (run.log_likelihood > best_log_likelihood) {
+          best_log_likelihood = run.log_likelihood;
+          best_theta = run.theta;
+        }
+      } else {
+        values.emplace_back(std::nullopt);
+        ++n_failed;
+      }
+      if (run.reused) ++result.n_reused;
+      result.evaluations.push_back(run);
+    }
+    result.n_failed += n_failed;
+    if (options_.progress != nullptr) {
+      const std::size_t n_new = missing.size();
+      std::ostream& out = *options_.progress;
+      out << "calibration " << design_.name << ": batch " << batch << ", " << runs.size() << " run"
+          << (runs.size() == 1 ? "" : "s") << " (" << n_new << " new";
+      if (n_new > 0) out << " on " << n_workers << " worker" << (n_workers == 1 ? "" : "s");
+      out << ", " << runs.size() - n_new << " reused, " << n_failed << " failed) in "
+          << format_duration(std::chrono::duration<double>(Clock::now() - batch_start).count()) << "; "
+          << result.evaluations.size() << " runs so far";
+      if (best_theta.size() > 0) {
+        out.precision(6);
+        out << "; best ln L " << best_log_likelihood << " at " << format_theta(parameters, best_theta);
+      }
+      out << "\n" << std::flush;
+    }
+    return values;
+  };
+
+  SbalcResult sbalc;
+  try {
+    sbalc = Sbalc(static_cast<int>(d), evaluate_batch, options_.sbalc).run();
+  } catch (const AbortCalibration& abort) {
+    if (abort.interrupted) throw CalibrationInterrupted(abort.message);
+    throw CalibrationError(abort.message);
+  }
+  result.n_evaluations = result.evaluations.size();
+  if (!sbalc.surrogate) {
+    std::string reasons;
+    for (const auto& run : result.evaluations) {
+      if (!run.ok && reasons.size() < 400) reasons += "\n  " + format_theta(parameters, run.theta) + ": " + run.failure_reason;
+    }
+    throw CalibrationError("calibration '" + design_.name + "': " + sbalc.stop_reason +
+                           "; a GP of the log-likelihood needs two or more" + reasons);
+  }
+
+  result.converged = sbalc.converged;
+  result.stop_reason = sbalc.stop_reason;
+  result.log_evidence = sbalc.log_evidence;
+  result.log_evidence_lower = sbalc.log_evidence_lower;
+  result.log_evidence_upper = sbalc.log_evidence_upper;
+  result.ratio = sbalc.ratio;
+  result.noise_ratio = sbalc.noise_ratio;
+  result.noise_standard_deviation = sbalc.noise_standard_deviation;
+  result.history = sbalc.history;
+  result.hyperparameters = sbalc.surrogate->hyperparameters();
+  result.trend_used = sbalc.surrogate->trend_used();
+  result.design_unit = sbalc.design;
+  result.design_log_likelihoods = sbalc.log_likelihoods;
+
+  // SIR posterior of the pool, mapped to physical units.
+  const PosteriorResult posterior = SirPosterior(sbalc, options_.posterior).run();
+  result.pool = rows_to_physical(parameters, sbalc.pool);
+  result.pool_weights = posterior.weights;
+  result.pool_log_likelihood = sbalc.pool_mean;
+  result.samples = rows_to_physical(parameters, posterior.samples);
+  result.mean = result.pool.transpose() * posterior.weights;
+  const Eigen::MatrixXd centred = result.pool.rowwise() - result.mean.transpose();
+  const Eigen::MatrixXd covariance = centred.transpose() * posterior.weights.asDiagonal() * centred;
+  result.standard_deviation = covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+  result.correlation = Eigen::MatrixXd::Identity(static_cast<Eigen::Index>(d), static_cast<Eigen::Index>(d));
+  for (Eigen::Index i = 0; i < covariance.rows(); ++i)
+    for (Eigen::Index j = 0; j < covariance.cols(); ++j)
+      if (i != j && result.standard_deviation(i) > 0.0 && result.standard_deviation(j) > 0.0)
+        result.correlation(i, j) = covariance(i, j) / (result.standard_deviation(i) * result.standard_deviation(j));
+  result.map_point = unit_to_physical(parameters, posterior.map_point);
+  result.map_log_likelihood = posterior.map_log_density;
+  result.credible_level = posterior.credible_level;
+  Eigen::VectorXd lower(static_cast<Eigen::Index>(d)), upper(static_cast<Eigen::Index>(d));
+  for (std::size_t i = 0; i < d; ++i) {
+    lower[static_cast<Eigen::Index>(i)] = posterior.credible_intervals[i].lower;
+    upper[static_cast<Eigen::Index>(i)] = posterior.credible_intervals[i].upper;
+  }
+  result.credible_lower = unit_to_physical(parameters, lower);
+  result.credible_upper = unit_to_physical(parameters, upper);
+  result.effective_sample_size = posterior.effective_sample_size;
+  result.ess_threshold = posterior.ess_threshold;
+  result.poorly_resolved = posterior.poorly_resolved;
+  result.warning = posterior.warning;
+  result.elapsed = std::chrono::duration<double>(Clock::now() - start).count();
+  return result;
+}
+
+}  // namespace rsw::calibration

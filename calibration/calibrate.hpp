@@ -1,0 +1,156 @@
+// Bayesian calibration of a forward model against observed features (paper §2.4–2.5,
+// CALIBRATION.md §4–6): construct → run() → CalibrationResult.
+//
+//   posterior  f(θ | Y) = L(θ) f(θ) / c,   c = ∫ L(θ) f(θ) dθ   (the evidence)
+//   ln L(θ)    = −½ Σ_k r_kᵀ Σ⁻¹ r_k − (N_obs/2) ln det(2πΣ),  r_k = Y^(k) − M(θ)   (likelihood.hpp)
+//
+// SBALC (Li et al. 2025; sbalc.hpp) learns a GP surrogate of ln L in the unit cube
+// u ∈ [0,1]^d, where the prior is uniform: u_i is the prior CDF value of θ_i (for a
+// normal prior, θ_i = μ + σ Φ⁻¹(u_i)), so c = E_u[L(θ(u))] for every kind of prior.
+// Each batch of points SBALC asks for is mapped u → θ (physical, ParameterSpace) and
+// run through the EvaluationFarm (farm.hpp: worker processes in parallel, each result
+// appended to an HDF5 file as it finishes, failures recorded with their reason and
+// returned to SBALC as failed evaluations). The posterior is then the SIR resample of
+// SBALC's prior pool with weights ∝ exp m(u) (Smith & Gelfand 1992; posterior.hpp),
+// reported in physical units: weighted mean and standard deviation of θ, equal-tailed
+// credible intervals (the u-quantiles mapped through the monotone u → θ_i), the MAP
+// (the largest surrogate posterior density in u, i.e. the surrogate's maximum
+// likelihood in the prior box for uniform-type priors), the effective sample size and
+// its warning.
+//
+// The evaluation cache (resume). Every farm call writes its own study results file
+// <evaluations_folder>/runs_NNNN.h5 (NNNN counts the calls, also across resumed
+// sessions), so the folder holds every finished run of every session, including those
+// of a session killed mid-batch. With resume, all finished runs in the folder are read
+// into a cache keyed by the exact bits of θ. SBALC is deterministic for a fixed seed,
+// pool, design and observations, so a resumed calibration asks for the same θ, finds
+// them in the cache without running the model, and continues bit for bit where the
+// killed one stopped; only θ not in the cache are evaluated. A larger evaluation cap
+// than before continues a calibration that did not converge. Files of another model
+// set-up (parameters, config keys, units, features, the model fingerprint) are refused
+// with the first difference; without resume an existing folder is never reused.
+#pragma once
+
+#include "calibration/farm.hpp"
+#include "calibration/forward_model.hpp"
+#include "calibration/likelihood.hpp"
+#include "calibration/posterior.hpp"
+#include "calibration/sbalc.hpp"
+
+#include <Eigen/Core>
+
+#include <filesystem>
+#include <iosfwd>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace rsw::calibration {
+
+class CalibrationError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// SIGINT/SIGTERM stopped a batch; the finished runs are in the evaluation folder.
+class CalibrationInterrupted : public CalibrationError {
+ public:
+  using CalibrationError::CalibrationError;
+};
+
+struct CalibrationOptions {
+  SbalcOptions sbalc;
+  PosteriorOptions posterior;
+  // The evaluation cache, one study results file per farm call (see above).
+  std::filesystem::path evaluations_folder;
+  // Workers, resume, run time limit, on_result (tests) of every farm call; its
+  // `progress` and `distribution` are not used (batches run on local worker processes;
+  // one line per batch goes to `progress` below).
+  FarmOptions farm;
+  std::ostream* progress = nullptr;
+};
+
+// One forward-model run asked for by SBALC, in the order asked.
+struct CalibrationEvaluation {
+  std::size_t batch = 0;          // SBALC's evaluator call (0: the initial design)
+  Eigen::VectorXd theta_unit;     // u ∈ [0,1]^d
+  Eigen::VectorXd theta;          // physical θ, parameter units
+  bool ok = false;
+  Eigen::VectorXd features;       // SI; NaN unless ok
+  double log_likelihood = 0.0;    // ln L(θ); NaN unless ok
+  std::string failure_reason;     // empty when ok
+  double wall_time = 0.0;         // [s] of the run
+  bool reused = false;            // found in the evaluation cache (resume)
+};
+
+struct CalibrationResult {
+  std::vector<std::string> parameter_names;
+  std::vector<std::string> parameter_units;
+  std::vector<std::string> feature_names;
+
+  // Evidence and convergence (SBALC, last iteration).
+  bool converged = false;
+  std::string stop_reason;
+  double log_evidence = 0.0;        // ln ĉ
+  double log_evidence_lower = 0.0;  // ln c_lower
+  double log_evidence_upper = 0.0;  // ln c_upper
+  double ratio = 0.0;               // (c_upper − c_lower)/ĉ
+  double noise_ratio = 0.0;         // the part of the ratio due to the log-likelihood noise
+  double noise_standard_deviation = 0.0;  // τ of the GP nugget, log-likelihood units
+  std::vector<SbalcIteration> history;    // chosen points in u
+  GaussianProcessHyperparameters hyperparameters;  // of the last GP (length scales in u)
+  TrendType trend_used = TrendType::Constant;
+  Eigen::MatrixXd design_unit;      // successful points of the GP, u
+  Eigen::VectorXd design_log_likelihoods;
+
+  // Runs.
+  std::vector<CalibrationEvaluation> evaluations;
+  std::size_t n_evaluations = 0;    // runs asked for by SBALC (reused included)
+  std::size_t n_reused = 0;         // taken from the evaluation cache
+  std::size_t n_failed = 0;
+
+  // Posterior, physical units.
+  Eigen::MatrixXd pool;             // N_M × d prior pool, θ
+  Eigen::VectorXd pool_weights;     // normalised importance weights
+  Eigen::VectorXd pool_log_likelihood;  // GP mean m at the pool points
+  Eigen::MatrixXd samples;          // n_samples × d resampled draws, θ
+  Eigen::VectorXd mean;
+  Eigen::VectorXd standard_deviation;
+  Eigen::MatrixXd correlation;
+  Eigen::VectorXd map_point;
+  double map_log_likelihood = 0.0;  // surrogate ln L at the MAP
+  double credible_level = 0.0;
+  Eigen::VectorXd credible_lower;
+  Eigen::VectorXd credible_upper;
+  double effective_sample_size = 0.0;
+  double ess_threshold = 0.0;
+  bool poorly_resolved = false;
+  std::string warning;              // empty unless poorly_resolved
+
+  double elapsed = 0.0;             // [s]
+};
+
+// u ∈ [0,1]^d → physical θ through the priors' inverse CDFs (u kept off 0 and 1 by
+// 2⁻⁵³ so that normal priors stay finite).
+Eigen::VectorXd unit_to_physical(const ParameterSpace& parameters, const Eigen::VectorXd& unit_point);
+
+class Calibration {
+ public:
+  // `design` names the study, its parameters (priors), features and the model
+  // fingerprint (its points are not used). The model must outlive run().
+  Calibration(const ForwardModel& model, StudyDesign design, GaussianLikelihood likelihood,
+              CalibrationOptions options);
+
+  // Throws CalibrationError: an existing evaluation folder without resume, cache files
+  // of another set-up, a farm error, an interrupt (SIGINT/SIGTERM; the runs so far are
+  // kept for resume), or fewer than two successful runs.
+  CalibrationResult run() const;
+
+ private:
+  const ForwardModel& model_;
+  StudyDesign design_;
+  GaussianLikelihood likelihood_;
+  CalibrationOptions options_;
+};
+
+}  // namespace rsw::calibration

@@ -1,0 +1,282 @@
+// `rsw calibrate` as a user runs it, and tools/plot_calibration.py on its output. The
+// binary is rsw_analytic (tests/calibration/analytic_rsw_main.cpp): the same command
+// (tools/calibrate_command.cpp) with the smooth analytic model of analytic_models.hpp,
+// which also writes synthetic predictive signals, so a calibration takes about a second.
+//   - every result file is written with its documented columns and keys;
+//   - an existing calibration needs --resume; --resume reruns nothing and reproduces
+//     the files exactly; a calibration stopped by SIGTERM mid-batch resumes without
+//     repeating finished runs and ends like an uninterrupted one;
+//   - a bad observation file exits with code 2 naming the study key, file and line;
+//   - the twin-experiment studies load (`study show`);
+//   - the plot script draws the corner plot, the convergence history and the
+//     predictive overlay.
+#include <nlohmann/json.hpp>
+
+#include <gtest/gtest.h>
+
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <thread>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct CommandResult {
+  int status = -1;
+  std::string output;  // stdout and stderr
+};
+
+CommandResult run_command(const std::string& command) {
+  CommandResult r;
+  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen((command + " 2>&1").c_str(), "r"), pclose);
+  std::array<char, 4096> buf;
+  while (fgets(buf.data(), buf.size(), pipe.get())) r.output += buf.data();
+  r.status = WEXITSTATUS(pclose(pipe.release()));
+  return r;
+}
+
+CommandResult run_rsw(const std::string& args) { return run_command(std::string(RSW_ANALYTIC_BINARY) + " " + args); }
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("rsw_calibrate_cli_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+fs::path write_file(const fs::path& path, const std::string& text) {
+  std::ofstream out(path);
+  out << text;
+  return path;
+}
+
+std::string read_file(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// The smooth analytic model y_k = (k + 1) a + Σ_i cos((k + 1)(i + 1) θ_i / 7) of two
+// parameters on [0, 1], observed three times near θ = (0.3, 0.6) (y = 2.28442,
+// 2.53813), with σ = 0.05 per feature.
+fs::path write_calibration_study(const fs::path& dir, const std::string& name, const std::string& case_text,
+                                 int batch_size = 3) {
+  write_file(dir / "case.yaml", case_text);
+  write_file(dir / "observed.csv", "# y at (0.3, 0.6) plus noise\nR_beta, dS_P\n2.29, 2.53\n2.28, 2.55\n2.30, 2.52\n");
+  return write_file(dir / (name + ".yaml"), "study: {name: " + name + R"(}
+parameters:
+  - {name: a, config_key: test.a, prior: uniform, lower: 0, upper: 1}
+  - {name: b, config_key: test.b, prior: uniform, lower: 0, upper: 1}
+features: [{name: R_beta}, {name: dS_P}]
+model: {case: case.yaml}
+calibration:
+  observations: {features_file: observed.csv}
+  noise:
+    kind: standard_deviations
+    standard_deviations: [{feature: R_beta, value: 0.05}, {feature: dS_P, value: 0.05}]
+  sbalc: {batch_size: )" + std::to_string(batch_size) + R"(, max_evaluations: 60}
+  posterior: {n_samples: 1000, n_predictive: 2}
+)");
+}
+
+bool has_line_starting(const std::string& text, const std::string& start) {
+  return text.rfind(start, 0) == 0 || text.find("\n" + start) != std::string::npos;
+}
+
+}  // namespace
+
+TEST(CalibrateCli, WritesEveryFileAndResumesIdentically) {
+  const fs::path dir = fresh_dir("files");
+  const fs::path study = write_calibration_study(dir, "smooth", "analytic: {function: smooth}\n");
+  const fs::path out = dir / "out";
+  CommandResult r = run_rsw("calibrate " + study.string() + " --workers 2 -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("calibration smooth: converged after "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("calibration smooth: batch 0, 5 runs (5 new on 2 workers, 0 reused, 0 failed)"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("90 % interval ["), std::string::npos) << r.output;
+
+  // The summary.
+  const auto json = nlohmann::json::parse(read_file(out / "smooth_calibration.json"));
+  EXPECT_EQ(json["study"], "smooth");
+  EXPECT_TRUE(json["converged"].get<bool>()) << json.dump(2);
+  const int n_runs = json["n_evaluations"].get<int>();
+  EXPECT_GE(n_runs, 8);
+  EXPECT_LE(n_runs, 60);
+  EXPECT_EQ(json["n_reused"], 0);
+  for (const char* key : {"log_evidence", "log_evidence_lower", "log_evidence_upper", "ratio"}) {
+    EXPECT_TRUE(json["evidence"][key].is_number()) << key;
+  }
+  ASSERT_EQ(json["parameters"].size(), 2u);
+  const auto& a = json["parameters"][0];
+  EXPECT_EQ(a["name"], "a");
+  EXPECT_NEAR(a["mean"].get<double>(), 0.3, 0.05);  // a is well determined by the observations
+  EXPECT_LT(a["credible_lower"].get<double>(), 0.3);
+  EXPECT_GT(a["credible_upper"].get<double>(), 0.3);
+  EXPECT_TRUE(a["map"].is_number());
+  EXPECT_DOUBLE_EQ(json["credible_level"].get<double>(), 0.9);
+  EXPECT_GT(json["effective_sample_size"].get<double>(), 0.0);
+  EXPECT_TRUE(json["warning"].is_string());
+  EXPECT_EQ(json["noise"]["kind"], "standard_deviations");
+  EXPECT_DOUBLE_EQ(json["noise"]["features"][0]["measurement_standard_deviation"].get<double>(), 0.05);
+  ASSERT_EQ(json["predictive"].size(), 3u);  // the posterior mean and two samples
+  EXPECT_EQ(json["predictive"][0]["name"], "posterior_mean");
+  for (const auto& run : json["predictive"]) {
+    EXPECT_EQ(run["status"], "ok") << run.dump();
+    EXPECT_TRUE(fs::exists(run["signal_file"].get<std::string>())) << run.dump();
+  }
+
+  // The tables.
+  const std::string posterior = read_file(out / "smooth_posterior.csv");
+  EXPECT_EQ(posterior.rfind("sample,a [1],b [1]\n0,", 0), 0u) << posterior.substr(0, 200);
+  EXPECT_EQ(std::count(posterior.begin(), posterior.end(), '\n'), 1001);
+  const std::string diagnostics = read_file(out / "smooth_diagnostics.csv");
+  EXPECT_EQ(diagnostics.rfind("iteration,n_points,n_evaluations,log_evidence,log_evidence_lower,log_evidence_upper,"
+                              "ratio,noise_ratio,tolerance_used,noise_standard_deviation,signal_variance,jitter,"
+                              "log_learning_function,n_chosen,length_scale:a,length_scale:b\n0,5,5,",
+                              0),
+            0u)
+      << diagnostics.substr(0, 300);
+  EXPECT_TRUE(fs::exists(out / "smooth_calibration.h5"));
+  EXPECT_TRUE(fs::exists(out / "smooth_calibration/evaluations/runs_0000.h5"));
+  EXPECT_TRUE(fs::exists(out / "smooth_calibration/predictive.h5"));
+
+  // No silent overwrite; --resume reruns nothing and writes the same files.
+  r = run_rsw("calibrate " + study.string() + " -q -o " + out.string());
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("exists already; continue the calibration with --resume"), std::string::npos) << r.output;
+  r = run_rsw("calibrate " + study.string() + " -q --resume -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("after " + std::to_string(n_runs) + " runs (" + std::to_string(n_runs) + " reused, 0 failed)"),
+            std::string::npos)
+      << r.output;
+  EXPECT_EQ(read_file(out / "smooth_posterior.csv"), posterior);
+  EXPECT_EQ(read_file(out / "smooth_diagnostics.csv"), diagnostics);
+  const auto again = nlohmann::json::parse(read_file(out / "smooth_calibration.json"));
+  EXPECT_EQ(again["evidence"], json["evidence"]);
+  EXPECT_EQ(again["parameters"], json["parameters"]);
+  fs::remove_all(dir);
+}
+
+TEST(CalibrateCli, TerminatedCalibrationResumesWithoutRepeatingRuns) {
+  const fs::path dir = fresh_dir("terminated");
+  const fs::path study = write_calibration_study(dir, "slow", "analytic: {function: smooth, delay: 40 ms}\n", 2);
+  const fs::path stopped = dir / "stopped", whole = dir / "whole";
+
+  // Start the calibration, stop it with SIGTERM (a batch system's time limit) once its
+  // third batch is under way.
+  const fs::path log = dir / "stopped.log";
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    ::dup2(fd, 1);
+    ::dup2(fd, 2);
+    ::execl(RSW_ANALYTIC_BINARY, "rsw_analytic", "calibrate", study.c_str(), "-q", "--workers", "2", "-o",
+            stopped.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  const fs::path third = stopped / "slow_calibration/evaluations/runs_0002.h5";
+  for (int k = 0; k < 600 && !fs::exists(third); ++k) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  ::kill(child, SIGTERM);
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  ASSERT_TRUE(fs::exists(third)) << read_file(log);
+  const std::string stopped_output = read_file(log);
+  // Stopped inside a batch: a clean interrupt naming the resume command; between
+  // batches (in the GP fit) the default action of SIGTERM ends the process. (On a
+  // heavily loaded machine the calibration may even have finished first.)
+  const bool finished = WIFEXITED(status) && WEXITSTATUS(status) == 0;
+  if (WIFEXITED(status) && !finished) {
+    EXPECT_EQ(WEXITSTATUS(status), 1) << stopped_output;
+    EXPECT_NE(stopped_output.find("interrupted"), std::string::npos) << stopped_output;
+    EXPECT_NE(stopped_output.find("--resume"), std::string::npos) << stopped_output;
+  } else if (!finished) {
+    EXPECT_EQ(WTERMSIG(status), SIGTERM);
+  }
+  if (!finished) EXPECT_FALSE(fs::exists(stopped / "slow_posterior.csv"));
+
+  CommandResult r = run_rsw("calibrate " + study.string() + " -q --workers 2 --resume -o " + stopped.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  const std::size_t reused_at = r.output.find(" reused");
+  ASSERT_NE(reused_at, std::string::npos) << r.output;
+  const std::size_t open = r.output.rfind('(', reused_at);
+  const int n_reused = std::stoi(r.output.substr(open + 1, reused_at - open - 1));
+  EXPECT_GE(n_reused, 7) << r.output;  // the initial design and the second batch at least
+
+  r = run_rsw("calibrate " + study.string() + " -q --workers 2 -o " + whole.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_EQ(read_file(stopped / "slow_posterior.csv"), read_file(whole / "slow_posterior.csv"));
+  EXPECT_EQ(read_file(stopped / "slow_diagnostics.csv"), read_file(whole / "slow_diagnostics.csv"));
+  fs::remove_all(dir);
+}
+
+TEST(CalibrateCli, BadObservationFileExitsWithCodeTwoNamingKeyFileAndLine) {
+  const fs::path dir = fresh_dir("bad");
+  const fs::path study = write_calibration_study(dir, "bad", "analytic: {function: smooth}\n");
+  write_file(dir / "observed.csv", "R_beta, dS_P\n2.29, 2.53\n2.28, x\n");
+  const CommandResult r = run_rsw("calibrate " + study.string() + " -o " + (dir / "out").string());
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("bad.yaml:8:33: calibration.observations.features_file = observed.csv: " +
+                          (dir / "observed.csv").string() + ":3: column 2 ('dS_P'): 'x' is not a finite number"),
+            std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(dir / "out" / "bad_calibration"));
+  fs::remove_all(dir);
+}
+
+TEST(CalibrateCli, TwinStudiesShowTheirCalibrationSection) {
+  for (const char* name : {"twin_p1", "twin_multi"}) {
+    const CommandResult r =
+        run_rsw("study show " + std::string(RSW_SOURCE_DIR) + "/validation/twin/" + name + ".yaml");
+    ASSERT_EQ(r.status, 0) << r.output;
+    EXPECT_TRUE(has_line_starting(r.output, "calibration:")) << r.output;
+    EXPECT_NE(r.output.find("paper_case/weld.yaml"), std::string::npos) << r.output;
+  }
+}
+
+TEST(CalibrateCli, PlotScriptDrawsCornerConvergenceAndPredictive) {
+  const CommandResult has_libraries = run_command("/usr/bin/python3 -c 'import matplotlib, h5py, numpy'");
+  if (has_libraries.status != 0) {
+    GTEST_SKIP() << "/usr/bin/python3 lacks matplotlib, h5py or numpy (run tools/setup.sh): " << has_libraries.output;
+  }
+  const fs::path dir = fresh_dir("plot");
+  const fs::path study = write_calibration_study(dir, "plotted", "analytic: {function: smooth}\n");
+  const fs::path out = dir / "out";
+  CommandResult r = run_rsw("calibrate " + study.string() + " -q -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  const std::string script = "/usr/bin/python3 " + std::string(RSW_SOURCE_DIR) + "/tools/plot_calibration.py ";
+  r = run_command(script + (out / "plotted_calibration.json").string() + " --truth a=0.3 b=0.6 --measured " +
+                  std::string(RSW_SOURCE_DIR) + "/validation/signals/measured_example.csv -o " +
+                  (dir / "plots").string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  for (const char* file : {"plotted_corner.png", "plotted_convergence.png", "plotted_predictive.png"}) {
+    EXPECT_TRUE(fs::exists(dir / "plots" / file)) << file << "\n" << r.output;
+    EXPECT_GT(fs::file_size(dir / "plots" / file), 10000u) << file;
+  }
+  // From the .h5 too, into the result's folder; a wrong --truth name is an error.
+  r = run_command(script + (out / "plotted_calibration.h5").string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_TRUE(fs::exists(out / "plotted_corner.png"));
+  r = run_command(script + (out / "plotted_calibration.json").string() + " --truth c=1");
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find("no parameter 'c' (the calibration has: a, b)"), std::string::npos) << r.output;
+  fs::remove_all(dir);
+}
