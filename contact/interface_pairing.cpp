@@ -143,7 +143,14 @@ bool InterfacePairing::update(const std::vector<fem::Point>& x) {
     // when the point slides along the face); the nodal normal when the closest
     // point is a node between two faces (convex corner).
     Eigen::Vector2d normal = outward_normal(x[mf[0]], x[mf[1]]);
-    if (best_eta <= 0.0 || best_eta >= 1.0) normal = node_normal(mf[best_eta <= 0.0 ? 0 : 1]);
+    p.node_normal = false;
+    if (best_eta <= 0.0 || best_eta >= 1.0) {
+      const int node = mf[best_eta <= 0.0 ? 0 : 1];
+      normal = node_normal(node);
+      // At a free end the nodal normal is the end face's own normal.
+      const auto pos = std::lower_bound(master_nodes_.begin(), master_nodes_.end(), node) - master_nodes_.begin();
+      p.node_normal = master_faces_of_node_[pos].size() > 1;
+    }
     p.paired = true;
     p.master_face = best_face;
     p.master_nodes = mf;

@@ -50,6 +50,7 @@ struct ContactPoint {
   Eigen::Vector2d normal = Eigen::Vector2d::Zero();   // master outward normal
   Eigen::Vector2d tangent = Eigen::Vector2d::Zero();  // (n_z, -n_r)
   double gap = 0;                      // m
+  bool node_normal = false;            // n is the nodal normal of a master node between two faces
 };
 
 class InterfacePairing {

@@ -62,6 +62,22 @@ Assembler::Assembler(const Mesh& mesh, const DofMap& dofs, const Constraints& co
   }
   position_start_[n_elements] = static_cast<int>(positions_.size());
 
+  offset_.resize(n_elements + 1);
+  expanded_size_.resize(n_elements);
+  for (int e = 0; e < n_elements; ++e) {
+    offset_[e] = static_cast<int>(expansion_start_.size());
+    int size = 0;
+    for (int d : element_dofs_[e]) {
+      expansion_start_.push_back(static_cast<int>(expansion_.size()));
+      auto [b, end] = constraints.expansion(d);
+      for (auto it = b; it != end; ++it) expansion_.push_back({it->dof, it->weight});
+      size += static_cast<int>(end - b);
+    }
+    expanded_size_[e] = size;
+  }
+  offset_[n_elements] = static_cast<int>(expansion_start_.size());
+  expansion_start_.push_back(static_cast<int>(expansion_.size()));
+
   // Greedy colouring: cells sharing a free dof get different colours. Cells touching
   // a hub dof (one shared by many cells, such as the rigid motion of an electrode end
   // face) are assembled serially after the colours instead.
@@ -111,29 +127,47 @@ void Assembler::scatter(int element, const LocalSystem& local, SparseMatrix& K, 
                         bool homogeneous, bool assemble_matrix) const {
   const auto& cd = element_dofs_[element];
   const int n_local = static_cast<int>(cd.size());
-  double* values = K.valuePtr();
-  const int* pos = positions_.data() + position_start_[element];
+  const int* start = expansion_start_.data() + offset_[element];
+  const Term* terms = expansion_.data();
   // Vector part: F_e - K_e g for inhomogeneous constraints.
-  Eigen::VectorXd rhs = local.vector;
-  if (!homogeneous) {
+  auto scatter_vector = [&](const Eigen::VectorXd& rhs) {
+    for (int a = 0; a < n_local; ++a)
+      for (int i = start[a]; i < start[a + 1]; ++i) F[terms[i].dof] += terms[i].weight * rhs[a];
+  };
+  if (homogeneous) {
+    scatter_vector(local.vector);
+  } else {
+    Eigen::VectorXd rhs = local.vector;
     for (int b = 0; b < n_local; ++b) {
       const double g = constraints_.inhomogeneity(cd[b]);
       if (g != 0.0) rhs -= local.matrix.col(b) * g;
     }
-  }
-  for (int a = 0; a < n_local; ++a) {
-    auto [pb, pe] = constraints_.expansion(cd[a]);
-    for (auto p = pb; p != pe; ++p) F[p->dof] += p->weight * rhs[a];
+    scatter_vector(rhs);
   }
   if (!assemble_matrix) return;
+  // Zero entries are skipped (a coupling group's system is mostly zero: each contact
+  // point touches four of its nodes); the positions are then advanced past them.
+  double* values = K.valuePtr();
+  const int* pos = positions_.data() + position_start_[element];
+  const int column_size = expanded_size_[element];
   for (int b = 0; b < n_local; ++b) {
-    auto [qb, qe] = constraints_.expansion(cd[b]);
-    for (auto q = qb; q != qe; ++q)
+    const double* column = local.matrix.data() + static_cast<std::ptrdiff_t>(b) * local.matrix.rows();
+    const int n_q = start[b + 1] - start[b];
+    if (std::all_of(column, column + n_local, [](double v) { return v == 0.0; })) {
+      pos += n_q * column_size;
+      continue;
+    }
+    for (int j = start[b]; j < start[b + 1]; ++j) {
+      const double wq = terms[j].weight;
       for (int a = 0; a < n_local; ++a) {
-        auto [pb, pe] = constraints_.expansion(cd[a]);
-        const double kab = local.matrix(a, b) * q->weight;
-        for (auto p = pb; p != pe; ++p) values[*pos++] += p->weight * kab;
+        const double kab = column[a] * wq;
+        if (kab == 0.0) {
+          pos += start[a + 1] - start[a];
+          continue;
+        }
+        for (int i = start[a]; i < start[a + 1]; ++i) values[*pos++] += terms[i].weight * kab;
       }
+    }
   }
 }
 

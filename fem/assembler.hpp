@@ -86,6 +86,17 @@ class Assembler {
   std::vector<std::vector<int>> element_dofs_;
   std::vector<int> position_start_;  // per element, into positions_
   std::vector<int> positions_;       // value index of every (a, p, b, q) contribution
+  // The constraint expansion of every element dof, copied out of the constraints so
+  // that the scatter loop reads one contiguous array: element e's dof a expands to
+  // expansion_[expansion_start_[offset_[e] + a] ... expansion_start_[offset_[e] + a + 1]).
+  struct Term {
+    int dof;
+    double weight;
+  };
+  std::vector<int> offset_;           // per element, into expansion_start_
+  std::vector<int> expansion_start_;
+  std::vector<Term> expansion_;
+  std::vector<int> expanded_size_;    // per element, Σ_a |expansion(a)|
   std::vector<std::vector<int>> colours_;  // cells assembled in parallel, colour by colour
   std::vector<int> serial_cells_;          // cells on hub dofs, assembled serially
 };

@@ -36,6 +36,9 @@ class LinearSolver {
   void factorize(const SparseMatrix& A);
   // Solution of A x = b with the last factorisation.
   Eigen::VectorXd solve(const Eigen::VectorXd& b) const;
+  // Steps of iterative refinement in UMFPACK solves (UMFPACK's default: 2; each costs
+  // a product with A and a solve). Other kinds ignore it.
+  void set_refinement_steps(int steps);
   // analyze (if needed) + factorize + solve.
   Eigen::VectorXd solve(const SparseMatrix& A, const Eigen::VectorXd& b);
 
@@ -44,6 +47,58 @@ class LinearSolver {
   SolverKind kind_;
   std::unique_ptr<Impl> impl_;
   Eigen::Index analyzed_rows_ = -1, analyzed_nnz_ = -1;
+};
+
+// Iterative solution of a general system A x = b by GMRES, right-preconditioned with
+// a direct factorisation of a nearby matrix: the symmetric part (M + Mᵀ)/2 of some
+// earlier matrix M of the same pattern (CHOLMOD), or M itself (UMFPACK) when that
+// symmetric part is not positive definite. Made for Newton's method on a slowly
+// changing, nearly symmetric tangent (the unsymmetric part of a contact tangent is
+// the friction coupling): one factorisation serves many iterations and steps, and
+// the GMRES iterations show when it has gone stale. The tolerance is on the true
+// residual of the system, so the solution does not depend on how old the
+// preconditioner is.
+class PreconditionedGmres {
+ public:
+  struct Report {
+    bool converged = false;
+    int iterations = 0;              // GMRES iterations (preconditioner applications)
+    double relative_residual = 0;    // |b - A x| / |b|
+  };
+  PreconditionedGmres();
+  ~PreconditionedGmres();
+  PreconditionedGmres(PreconditionedGmres&&) noexcept;
+  PreconditionedGmres& operator=(PreconditionedGmres&&) noexcept;
+
+  // Factorises the preconditioner from M (see above). Throws std::runtime_error if
+  // neither factorisation succeeds.
+  void set_preconditioner(const SparseMatrix& M);
+  bool has_preconditioner() const { return kind_ != Kind::none; }
+  // Drops the preconditioner (the next solve must set one).
+  void reset() { kind_ = Kind::none; }
+  int n_factorizations() const { return n_factorizations_; }
+
+  // x with |b - A x| <= tolerance |b| after at most max_iterations GMRES iterations
+  // (no restart), starting from x = 0. Without convergence x is the last iterate.
+  Report solve(const SparseMatrix& A, const Eigen::VectorXd& b, Eigen::VectorXd& x, double tolerance,
+               int max_iterations) const;
+  // The same with the refresh policy: the preconditioner is refactorised from A
+  // before the solve when there is none or the previous solve of this object needed
+  // more than `refresh_after` iterations, and after a solve that did not converge
+  // within `max_iterations` (which is then repeated). Throws std::runtime_error if
+  // even a fresh preconditioner does not converge.
+  Report solve_refreshing(const SparseMatrix& A, const Eigen::VectorXd& b, Eigen::VectorXd& x, double tolerance,
+                          int refresh_after, int max_iterations);
+  int n_iterations() const { return n_iterations_; }  // summed over solve_refreshing
+
+ private:
+  enum class Kind { none, symmetric_part, full };
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  Kind kind_ = Kind::none;
+  int n_factorizations_ = 0;
+  int n_iterations_ = 0;
+  int last_iterations_ = 0;
 };
 
 }  // namespace rsw::fem

@@ -289,20 +289,22 @@ struct Electrical::Impl {
   void group_kernel(int g, const std::vector<std::vector<double>>& h, fem::LocalSystem& local) const {
     const auto [p, f] = groups[g];
     const auto& pairing = (*contact->pairings)[p];
-    const int n_local = static_cast<int>(local.vector.size());
-    Eigen::VectorXd jump(n_local);
     for (int k = 0; k < pairing.n_gauss(); ++k) {
       const int i = f * pairing.n_gauss() + k;
       if (h[p][i] == 0) continue;
       const auto& pt = pairing.points()[i];
-      jump.setZero();
-      for (int s = 0; s < 2; ++s) {
-        jump[pairing.local_index(f, pt.slave_nodes[s])] += pt.slave_weights[s];
-        jump[pairing.local_index(f, pt.master_nodes[s])] -= pt.master_weights[s];
-      }
-      local.matrix.noalias() += h[p][i] * pt.area * jump * jump.transpose();
+      // The point's four nodes (two slave, two master) and their jump weights φ_s − φ_m.
+      const std::array<int, 4> node{pairing.local_index(f, pt.slave_nodes[0]), pairing.local_index(f, pt.slave_nodes[1]),
+                                    pairing.local_index(f, pt.master_nodes[0]),
+                                    pairing.local_index(f, pt.master_nodes[1])};
+      const std::array<double, 4> jump{pt.slave_weights[0], pt.slave_weights[1], -pt.master_weights[0],
+                                       -pt.master_weights[1]};
+      const double c = h[p][i] * pt.area;
+      for (int a = 0; a < 4; ++a)
+        for (int b = 0; b < 4; ++b) local.matrix(node[a], node[b]) += c * jump[a] * jump[b];
     }
   }
+
 };
 
 Electrical::Electrical(const fem::Mesh& mesh, std::vector<const materials::Material*> body_materials,

@@ -47,7 +47,7 @@ struct Mechanics::Impl {
   std::vector<double> normal_penalty;  // per pairing, Pa/m
   std::vector<std::pair<int, int>> groups;  // (pairing, slave face)
   std::unique_ptr<fem::Assembler> force_assembler, displacement_assembler;
-  fem::LinearSolver force_solver, displacement_solver;
+  fem::PreconditionedGmres force_gmres, displacement_gmres;
 
   int n_q;
   std::vector<Vector4> strain, trial_strain;  // per cell * n_q
@@ -87,8 +87,6 @@ struct Mechanics::Impl {
         w_dof(dofs.extra_dof(0)),
         force_constraints(dofs.n_dofs()),
         displacement_constraints(dofs.n_dofs()),
-        force_solver(s.friction_coefficient > 0 ? fem::SolverKind::umfpack : fem::SolverKind::cholmod),
-        displacement_solver(s.friction_coefficient > 0 ? fem::SolverKind::umfpack : fem::SolverKind::cholmod),
         n_q(s.n_gauss * s.n_gauss) {
     if (std::getenv("RSW_VERBOSE")) settings.verbose = true;
     if (s.n_gauss < 1 || s.n_gauss > 3) throw std::invalid_argument("Mechanics: n_gauss must be 1, 2 or 3");
@@ -162,6 +160,11 @@ struct Mechanics::Impl {
     displacement_assembler = std::make_unique<fem::Assembler>(mesh, dofs, displacement_constraints, dof_groups);
 
     const std::size_t n_points = static_cast<std::size_t>(mesh.n_cells()) * n_q;
+    point_cache.assign(n_points, PointCache{});
+    geometry_stamp.assign(mesh.n_cells(), 0);
+    temperature_stamp.assign(mesh.n_cells(), 0);
+    cv.reinit(mesh, 0);
+    for (int q = 0; q < n_q; ++q) shape.push_back({cv.N(q, 0), cv.N(q, 1), cv.N(q, 2), cv.N(q, 3)});
     strain.assign(n_points, Vector4::Zero());
     trial_strain = strain;
     state.assign(n_points, materials::J2State{});
@@ -179,14 +182,86 @@ struct Mechanics::Impl {
     return x;
   }
 
+  // What the cell kernel needs of a cell that does not change within a step, kept per
+  // Gauss point: B̄ and JxW on the configuration x_n (until commit() moves it) and the
+  // temperature with its thermal strain (until the temperature field is replaced).
+  // Each cell is refreshed by the kernel itself when its stamps are out of date, so
+  // the parallel assembly writes only its own cell's entries.
+  struct PointCache {
+    Matrix48 B_bar;
+    double JxW = 0;
+    double temperature = 0, thermal_strain = 0, thermal_strain_slope = 0;
+  };
+  std::vector<PointCache> point_cache;                // per cell * n_q
+  std::vector<int> geometry_stamp, temperature_stamp;  // per cell: the generation cached
+  int geometry_generation = 1, temperature_generation = 1;
+  std::vector<std::array<double, 4>> shape;            // N_a at the Gauss points
+  bool need_matrix = true;                             // evaluate(): tangent wanted
+
+  void set_temperature(const Eigen::VectorXd& nodal_temperature) {
+    temperature = nodal_temperature;
+    ++temperature_generation;
+  }
+
+  void refresh_cell(int e) {
+    const auto& c = mesh.cells[e];
+    const std::size_t k0 = static_cast<std::size_t>(e) * n_q;
+    if (geometry_stamp[e] != geometry_generation) {
+      thread_local std::unique_ptr<fem::CellValues> scratch;
+      if (!scratch || scratch->n_q() != n_q) scratch = std::make_unique<fem::CellValues>(settings.n_gauss);
+      fem::CellValues& fv = *scratch;
+      fv.reinit(current, e);
+      // B̄ (Hughes 1980): the volumetric part of B replaced by its cell average, with the
+      // volumetric strain operator b = (∂N/∂r + N/r, ∂N/∂z).
+      constexpr int max_q = 9;
+      std::array<Eigen::Matrix<double, 1, 8>, max_q> b;
+      std::array<Matrix48, max_q> B;
+      Eigen::Matrix<double, 1, 8> b_mean = Eigen::Matrix<double, 1, 8>::Zero();
+      double volume = 0;
+      for (int q = 0; q < n_q; ++q) {
+        const double r = fv.point(q).x();
+        B[q].setZero();
+        for (int a = 0; a < 4; ++a) {
+          const Eigen::Vector2d& g = fv.grad_N(q, a);
+          const double N = fv.N(q, a);
+          B[q](0, 2 * a) = g.x();              // ε_rr = ∂u_r/∂r
+          B[q](1, 2 * a + 1) = g.y();          // ε_zz = ∂u_z/∂z
+          B[q](2, 2 * a) = N / r;              // ε_θθ = u_r / r
+          B[q](3, 2 * a) = sqrt_half * g.y();  // √2 ε_rz = (∂u_r/∂z + ∂u_z/∂r)/√2
+          B[q](3, 2 * a + 1) = sqrt_half * g.x();
+          b[q](2 * a) = g.x() + N / r;
+          b[q](2 * a + 1) = g.y();
+        }
+        b_mean += b[q] * fv.JxW(q);
+        volume += fv.JxW(q);
+      }
+      b_mean /= volume;
+      const Vector4 m(1.0, 1.0, 1.0, 0.0);
+      for (int q = 0; q < n_q; ++q) {
+        point_cache[k0 + q].B_bar = B[q] + (m / 3.0) * (b_mean - b[q]);
+        point_cache[k0 + q].JxW = fv.JxW(q);
+      }
+      geometry_stamp[e] = geometry_generation;
+    }
+    if (temperature_stamp[e] != temperature_generation) {
+      const materials::Material& mat = *cell_material[e];
+      for (int q = 0; q < n_q; ++q) {
+        double T = 0;
+        for (int a = 0; a < 4; ++a) T += shape[q][a] * temperature[c[a]];
+        const materials::J2Input in = materials::j2_input(mat, Vector4::Zero(), T, initial_temperature);
+        point_cache[k0 + q].temperature = T;
+        point_cache[k0 + q].thermal_strain = in.thermal_strain;
+        point_cache[k0 + q].thermal_strain_slope = in.thermal_strain_slope;
+      }
+      temperature_stamp[e] = temperature_generation;
+    }
+  }
+
   void cell_kernel(int e, fem::LocalSystem& local) {
-    // Scratch per thread: the cell kernel runs in parallel over cells of one colour.
-    thread_local std::unique_ptr<fem::CellValues> scratch;
-    if (!scratch || scratch->n_q() != n_q) scratch = std::make_unique<fem::CellValues>(settings.n_gauss);
-    fem::CellValues& fv = *scratch;
-    fv.reinit(current, e);
+    refresh_cell(e);
     const auto& c = mesh.cells[e];
     const materials::Material& mat = *cell_material[e];
+    const std::size_t k0 = static_cast<std::size_t>(e) * n_q;
     Eigen::Matrix<double, 8, 1> du;
     for (int a = 0; a < 4; ++a) du.segment<2>(2 * a) = increment.segment<2>(2 * c[a]);
     Eigen::Matrix<double, 8, 8> Ke = Eigen::Matrix<double, 8, 8>::Zero();
@@ -194,140 +269,157 @@ struct Mechanics::Impl {
 
     const double kappa = control == Control::displacement ? foundation[mesh.cell_body[e]] : 0.0;
     if (kappa > 0)  // seating foundation: body force -κ u_z towards the initial position
-      for (int q = 0; q < fv.n_q(); ++q) {
+      for (int q = 0; q < n_q; ++q) {
+        const double w = point_cache[k0 + q].JxW;
         double uz = 0;
-        for (int b = 0; b < 4; ++b) uz += fv.N(q, b) * (total[2 * c[b] + 1] + increment[2 * c[b] + 1]);
+        for (int b = 0; b < 4; ++b) uz += shape[q][b] * (total[2 * c[b] + 1] + increment[2 * c[b] + 1]);
         for (int a = 0; a < 4; ++a) {
-          Fe[2 * a + 1] -= kappa * uz * fv.N(q, a) * fv.JxW(q);
-          for (int b = 0; b < 4; ++b) Ke(2 * a + 1, 2 * b + 1) += kappa * fv.N(q, a) * fv.N(q, b) * fv.JxW(q);
+          Fe[2 * a + 1] -= kappa * uz * shape[q][a] * w;
+          for (int b = 0; b < 4; ++b) Ke(2 * a + 1, 2 * b + 1) += kappa * shape[q][a] * shape[q][b] * w;
         }
       }
 
-    // Cell average of the volumetric strain operator b = (∂N/∂r + N/r, ∂N/∂z).
-    constexpr int max_q = 9;
-    std::array<Eigen::Matrix<double, 1, 8>, max_q> b;
-    std::array<Matrix48, max_q> B;
-    Eigen::Matrix<double, 1, 8> b_mean = Eigen::Matrix<double, 1, 8>::Zero();
-    double volume = 0;
-    for (int q = 0; q < fv.n_q(); ++q) {
-      const double r = fv.point(q).x();
-      B[q].setZero();
-      for (int a = 0; a < 4; ++a) {
-        const Eigen::Vector2d& g = fv.grad_N(q, a);
-        const double N = fv.N(q, a);
-        B[q](0, 2 * a) = g.x();                   // ε_rr = ∂u_r/∂r
-        B[q](1, 2 * a + 1) = g.y();               // ε_zz = ∂u_z/∂z
-        B[q](2, 2 * a) = N / r;                   // ε_θθ = u_r / r
-        B[q](3, 2 * a) = sqrt_half * g.y();       // √2 ε_rz = (∂u_r/∂z + ∂u_z/∂r)/√2
-        B[q](3, 2 * a + 1) = sqrt_half * g.x();
-        b[q](2 * a) = g.x() + N / r;
-        b[q](2 * a + 1) = g.y();
-      }
-      b_mean += b[q] * fv.JxW(q);
-      volume += fv.JxW(q);
-    }
-    b_mean /= volume;
-    const Vector4 m(1.0, 1.0, 1.0, 0.0);
-    for (int q = 0; q < fv.n_q(); ++q) {
-      const Matrix48 B_bar = B[q] + (m / 3.0) * (b_mean - b[q]);
-      double T = 0;
-      for (int a = 0; a < 4; ++a) T += fv.N(q, a) * temperature[c[a]];
-      const std::size_t k = static_cast<std::size_t>(e) * n_q + q;
+    for (int q = 0; q < n_q; ++q) {
+      const std::size_t k = k0 + q;
+      const PointCache& pc = point_cache[k];
+      const Matrix48& B_bar = pc.B_bar;
       const Vector4 eps = strain[k] + B_bar * du;
-      const auto result = materials::j2_update(mat, state[k], materials::j2_input(mat, eps, T, initial_temperature));
+      materials::J2Input in;
+      in.strain = eps;
+      in.thermal_strain = pc.thermal_strain;
+      in.thermal_strain_slope = pc.thermal_strain_slope;
+      in.temperature = pc.temperature;
+      const auto result = materials::j2_update(mat, state[k], in);
       trial_strain[k] = eps;
       trial_state[k] = result.state;
       trial_stress[k] = result.stress;
-      const Matrix48 DB = result.tangent * B_bar;
-      Ke.noalias() += B_bar.transpose() * DB * fv.JxW(q);  // ∫ B̄ᵀ D B̄ dV
-      Fe.noalias() -= B_bar.transpose() * result.stress * fv.JxW(q);  // -∫ B̄ᵀ σ dV
+      if (need_matrix) {
+        const Matrix48 DB = result.tangent * B_bar;
+        Ke.noalias() += pc.JxW * B_bar.transpose().lazyProduct(DB);  // ∫ B̄ᵀ D B̄ dV (8x4x8: below GEMM size)
+      }
+      Fe.noalias() -= pc.JxW * (B_bar.transpose() * result.stress);  // -∫ B̄ᵀ σ dV
     }
     local.matrix += Ke;
     local.vector += Fe;
   }
 
+  // Contact, friction and ties at the points of one slave face. Each point couples
+  // four nodes (two slave, two master): its terms are formed on those 8 dofs and
+  // added into the face's coupling system at their local positions.
   void group_kernel(int g, fem::LocalSystem& local) {
+    using Vector8 = Eigen::Matrix<double, 8, 1>;
+    using Matrix8 = Eigen::Matrix<double, 8, 8>;
     const auto [p, f] = groups[g];
     const auto& pairing = pairings[p];
     const double eps_n = normal_penalty[p];
     const double eps_t = settings.tangential_penalty_ratio * eps_n;
     const double mu = settings.friction_coefficient;
-    const int n_local = static_cast<int>(local.vector.size());
-    Eigen::VectorXd Nv(n_local), Tv(n_local), du(n_local);
-    const auto& nodes = pairing.coupling_nodes(f);
-    for (std::size_t i = 0; i < nodes.size(); ++i) du.segment<2>(2 * i) = increment.segment<2>(2 * nodes[i]);
+    // Local dof of entry i of an 8-vector over (slave 0, slave 1, master 0, master 1).
+    std::array<int, 4> node_of{};
+    auto add = [&](const Vector8& v, const Matrix8& m) {
+      for (int i = 0; i < 8; ++i) {
+        const int r = 2 * node_of[i / 2] + i % 2;
+        local.vector[r] += v[i];
+        for (int j = 0; j < 8; ++j) local.matrix(r, 2 * node_of[j / 2] + j % 2) += m(i, j);
+      }
+    };
+    auto locate = [&](const std::array<int, 2>& slave, const std::array<int, 2>& master) {
+      for (int s = 0; s < 2; ++s) {
+        node_of[s] = pairing.local_index(f, slave[s]);
+        node_of[2 + s] = pairing.local_index(f, master[s]);
+      }
+      return std::all_of(node_of.begin(), node_of.end(), [](int i) { return i >= 0; });
+    };
+    auto node_increment = [&](int node) { return Eigen::Vector2d(increment[2 * node], increment[2 * node + 1]); };
     for (int k = 0; k < pairing.n_gauss(); ++k) {
       const int idx = f * pairing.n_gauss() + k;
       const auto& pt = pairing.points()[idx];
       trial_tau[p][idx] = 0.0;
       const Tie& tie = ties[p][idx];
       if (tie.on) {
-        Eigen::Matrix<double, 2, Eigen::Dynamic> B = Eigen::Matrix<double, 2, Eigen::Dynamic>::Zero(2, n_local);
-        Eigen::Vector2d d = pt.position;
-        bool complete = true;
-        for (int s2 = 0; s2 < 2; ++s2) {
-          const int ls = pairing.local_index(f, pt.slave_nodes[s2]);
-          const int lm = pairing.local_index(f, tie.master_nodes[s2]);
-          if (ls < 0 || lm < 0) {
-            complete = false;
-            break;
-          }
-          B.block<2, 2>(0, 2 * ls) += pt.slave_weights[s2] * Eigen::Matrix2d::Identity();
-          B.block<2, 2>(0, 2 * lm) -= tie.master_weights[s2] * Eigen::Matrix2d::Identity();
-          d -= tie.master_weights[s2] * (current.nodes[tie.master_nodes[s2]] +
-                                         Eigen::Vector2d(increment[2 * tie.master_nodes[s2]],
-                                                         increment[2 * tie.master_nodes[s2] + 1]));
-        }
-        if (!complete) {
+        // t = ε_N (d_b − d), d = x_s − x_m at fixed weights: linear, B maps the 8 dofs to d.
+        if (!locate(pt.slave_nodes, tie.master_nodes)) {
           pairing_within = false;
           continue;
         }
+        Eigen::Matrix<double, 2, 8> B;
+        for (int s = 0; s < 2; ++s) {
+          B.block<2, 2>(0, 2 * s) = pt.slave_weights[s] * Eigen::Matrix2d::Identity();
+          B.block<2, 2>(0, 4 + 2 * s) = -tie.master_weights[s] * Eigen::Matrix2d::Identity();
+        }
+        Eigen::Vector2d d = pt.position;
+        for (int s = 0; s < 2; ++s)
+          d -= tie.master_weights[s] * (current.nodes[tie.master_nodes[s]] + node_increment(tie.master_nodes[s]));
         const Eigen::Vector2d traction = eps_n * (tie.reference - d);  // on the slave side
-        local.vector += pt.reference_area * B.transpose() * traction;
-        local.matrix += eps_n * pt.reference_area * B.transpose() * B;
+        add(pt.reference_area * B.transpose() * traction, eps_n * pt.reference_area * B.transpose() * B);
         continue;
       }
       if (!pt.paired || pt.gap >= 0) continue;
-      Nv.setZero();
-      Tv.setZero();
-      bool complete = true;
-      for (int s = 0; s < 2; ++s) {
-        const int ls = pairing.local_index(f, pt.slave_nodes[s]);
-        const int lm = pairing.local_index(f, pt.master_nodes[s]);
-        if (ls < 0 || lm < 0) {
-          complete = false;
-          break;
-        }
-        Nv.segment<2>(2 * ls) += pt.slave_weights[s] * pt.normal;
-        Tv.segment<2>(2 * ls) += pt.slave_weights[s] * pt.tangent;
-        Nv.segment<2>(2 * lm) -= pt.master_weights[s] * pt.normal;
-        Tv.segment<2>(2 * lm) -= pt.master_weights[s] * pt.tangent;
-      }
-      if (!complete) {
+      if (!locate(pt.slave_nodes, pt.master_nodes)) {
         pairing_within = false;
         continue;
       }
-      // Tractions act on the undeformed area: the surface stretch is small, and the
-      // tangent is then exact (no area derivative to linearise).
+      // Nv, Tv: the gap and slip operators (g' = Nvᵀ u', slip' = Tvᵀ u' at fixed geometry).
+      Vector8 Nv, Tv, du;
+      for (int s = 0; s < 2; ++s) {
+        Nv.segment<2>(2 * s) = pt.slave_weights[s] * pt.normal;
+        Tv.segment<2>(2 * s) = pt.slave_weights[s] * pt.tangent;
+        Nv.segment<2>(4 + 2 * s) = -pt.master_weights[s] * pt.normal;
+        Tv.segment<2>(4 + 2 * s) = -pt.master_weights[s] * pt.tangent;
+        du.segment<2>(2 * s) = node_increment(pt.slave_nodes[s]);
+        du.segment<2>(4 + 2 * s) = node_increment(pt.master_nodes[s]);
+      }
+      // Tractions act on the undeformed area: the surface stretch is small, and no area
+      // derivative enters the tangent.
       const double A = pt.reference_area;
       const auto [pressure, k_n] = penalty_pressure(pt.gap, eps_n, settings.contact_smoothing);
-      local.vector += pressure * A * Nv;                     // contact force on both sides
-      local.matrix += k_n * A * Nv * Nv.transpose();         // -∂f/∂u
-      if (mu <= 0 || pressure <= 0) continue;
-      // Regularised Coulomb friction: τ = μ p tanh(τ_trial / (μ p)), τ_trial = τ_n + ε_T Δs.
-      // Linear (stick, stiffness ε_T) for small τ_trial, saturating smoothly at |τ| = μ p.
-      const double slip = Tv.dot(du);                        // tangential slip increment
-      const double tau_trial = tau[p][idx] + eps_t * slip;
-      const double limit = mu * pressure;
-      const double u = tau_trial / limit;
-      const double th = std::tanh(u), sech2 = 1 - th * th;
-      const double tau_value = limit * th;
-      const double dtau_dtrial = sech2;                        // ∂τ/∂τ_trial
-      const double dtau_dp = mu * (th - u * sech2);            // ∂τ/∂p
-      trial_tau[p][idx] = tau_value;
-      local.vector -= tau_value * A * Tv;                      // friction opposes the slip
-      local.matrix += dtau_dtrial * eps_t * A * Tv * Tv.transpose();
-      local.matrix -= dtau_dp * k_n * A * Tv * Nv.transpose();  // ∂p/∂u = -k_n Nvᵀ
+      Vector8 force = pressure * A * Nv;                        // contact force on both sides
+      Matrix8 stiffness = k_n * A * Nv * Nv.transpose();        // -∂f/∂u
+      // Geometric terms: the normal n, the tangent t and the master weights (1 − η, η)
+      // move with the master face e = x_2 − x_1 (length L) and with the projection η:
+      //   δn = t (n·δe)/L,  δt = −n (n·δe)/L,  δη = −(Tvᵀ δu + g (n·δe)/L)/L,
+      // with n·δe = −Dvᵀ δu, Dv = (0, 0, n, −n), Dt = (0, 0, t, −t). Hence
+      //   δNv = −(Tv Dvᵀ + Dv Tvᵀ + (g/L) Dv Dvᵀ) δu / L,
+      //   δTv = (Nv Dvᵀ − Dt Tvᵀ − (g/L) Dt Dvᵀ) δu / L.
+      // Where the closest point is a master node shared by two faces (nodal normal)
+      // these terms do not apply; there the slave point lies within |g| of the node and
+      // the terms they would replace are of order |g|/L.
+      const bool geometric = !pt.node_normal;
+      Vector8 Dv = Vector8::Zero(), Dt = Vector8::Zero();
+      double L = 1, gL = 0;
+      if (geometric) {
+        L = ((current.nodes[pt.master_nodes[1]] + node_increment(pt.master_nodes[1])) -
+             (current.nodes[pt.master_nodes[0]] + node_increment(pt.master_nodes[0])))
+                .norm();
+        gL = pt.gap / L;
+        Dv.segment<2>(4) = pt.normal;
+        Dv.segment<2>(6) = -pt.normal;
+        Dt.segment<2>(4) = pt.tangent;
+        Dt.segment<2>(6) = -pt.tangent;
+        stiffness += (pressure * A / L) * (Tv * Dv.transpose() + Dv * Tv.transpose() + gL * Dv * Dv.transpose());
+      }
+      if (mu > 0 && pressure > 0) {
+        // Regularised Coulomb friction: τ = μ p tanh(τ_trial / (μ p)), τ_trial = τ_n + ε_T Δs.
+        // Linear (stick, stiffness ε_T) for small τ_trial, saturating smoothly at |τ| = μ p.
+        const double slip = Tv.dot(du);  // tangential slip increment
+        const double tau_trial = tau[p][idx] + eps_t * slip;
+        const double limit = mu * pressure;
+        const double u = tau_trial / limit;
+        const double th = std::tanh(u), sech2 = 1 - th * th;
+        const double tau_value = limit * th;
+        const double dtau_dtrial = sech2;              // ∂τ/∂τ_trial
+        const double dtau_dp = mu * (th - u * sech2);  // ∂τ/∂p
+        trial_tau[p][idx] = tau_value;
+        force -= tau_value * A * Tv;  // friction opposes the slip
+        // ∂slip/∂u = Tvᵀ + duᵀ ∂Tv/∂u; ∂p/∂u = −k_n Nvᵀ.
+        Vector8 dslip = Tv;
+        if (geometric) dslip += (du.dot(Nv) * Dv - du.dot(Dt) * (Tv + gL * Dv)) / L;
+        stiffness += dtau_dtrial * eps_t * A * Tv * dslip.transpose();
+        stiffness -= dtau_dp * k_n * A * Tv * Nv.transpose();
+        if (geometric)
+          stiffness += (tau_value * A / L) * (Nv * Dv.transpose() - Dt * Tv.transpose() - gL * Dt * Dv.transpose());
+      }
+      add(force, stiffness);
     }
   }
 
@@ -350,7 +442,9 @@ struct Mechanics::Impl {
                                    l.vector.segment<2>(2 * a) -= p * fv.normal(q) * fv.N(q, a) * fv.JxW(q);
                              }});
     }
+    need_matrix = matrix;
     assembler.assemble(terms, K, R, /*homogeneous=*/true, matrix);
+    need_matrix = true;
     if (ctrl == Control::force) {
       Eigen::VectorXd f_ext = Eigen::VectorXd::Zero(dofs.n_dofs());
       f_ext[w_dof] = -force;  // the electrode presses down on the stack
@@ -402,61 +496,146 @@ struct Mechanics::Impl {
                  node < mesh.n_nodes() ? temperature[node] : 0.0, fd[worst], lin[worst]);
   }
 
-  MechanicsStepReport newton(Control ctrl, double load_scale) {
+  // Outcome of Newton iterations on one target (see newton()).
+  enum class Outcome { converged, stalled, out_of_iterations, failed };
+
+  // Newton iterations on R(Δu) − (1 − s) R_0 = 0 from the current increment until the
+  // ∞-norm is below `tolerance`, at most `max_iterations`. The linear systems are
+  // solved by GMRES preconditioned with a factorisation of an earlier tangent
+  // (fem::PreconditionedGmres), refactorised when it needs many iterations. Each
+  // full step is evaluated with its tangent (accepted almost always); a full step that
+  // does not reduce |R|₂ (Armijo) is halved, down to 1/64, with residual-only
+  // evaluations. If no length reduces |R|₂ the iterations stop (stalled) at the last
+  // accepted point: the Newton direction is then useless (a contact point closing or a
+  // plastic point unloading far inside the step), and smaller targets s are needed.
+  Outcome iterate(Control ctrl, const Eigen::VectorXd& R0, double s, double tolerance, int max_iterations,
+                  fem::SparseMatrix& K, Eigen::VectorXd& R, MechanicsStepReport& report) {
     fem::Constraints& cons = ctrl == Control::force ? force_constraints : displacement_constraints;
-    fem::LinearSolver& solver = ctrl == Control::force ? force_solver : displacement_solver;
+    fem::PreconditionedGmres& gmres = ctrl == Control::force ? force_gmres : displacement_gmres;
+    fem::SparseMatrix K_trial;
+    Eigen::VectorXd R_trial;
+    const double shift = 1 - s;
+    auto target = [&](const Eigen::VectorXd& r) -> Eigen::VectorXd { return shift == 0 ? r : r - shift * R0; };
+    Eigen::VectorXd Rs = target(R);
+    Eigen::VectorXd best = increment;  // the iterate of least |R − (1 − s) R_0|₂
+    double best_norm = Rs.norm();
+    int misses = 0;                    // consecutive steps without descent
+    for (int it = 1; it <= max_iterations; ++it) {
+      ++report.iterations;
+      // Linear tolerance: far below what the Newton iteration needs (|R| <= tolerance
+      // after the step), and 1e-4 while far away, where the direction is rough anyway.
+      const double eta = std::min(1e-4, std::max(1e-10, 0.01 * tolerance / std::max(Rs.norm(), 1e-300)));
+      Eigen::VectorXd dy;
+      try {
+        gmres.solve_refreshing(K, Rs, dy, eta, /*refresh_after=*/10, /*max_iterations=*/40);
+      } catch (const std::exception& e) {
+        report.message = std::string("linear solve failed: ") + e.what();
+        return Outcome::failed;
+      }
+      const Eigen::VectorXd step = cons.distribute(dy, /*homogeneous=*/true);
+      const Eigen::VectorXd base = increment;
+      const double norm2 = Rs.norm();
+      double alpha = 1.0;
+      increment = base + step;
+      evaluate(ctrl, K_trial, R_trial, true);
+      if (target(R_trial).norm() <= (1 - 1e-4) * norm2) {
+        std::swap(K, K_trial);
+        std::swap(R, R_trial);
+      } else {
+        bool descent = false;
+        while (!descent && alpha > 1.0 / 64) {
+          alpha *= 0.5;
+          increment = base + alpha * step;
+          evaluate(ctrl, K_trial, R_trial, false);
+          descent = target(R_trial).norm() <= (1 - 1e-4 * alpha) * norm2;
+        }
+        if (descent) {
+          misses = 0;
+        } else {
+          // No descent: the residual has a kink close by (a plastic point switching to
+          // unloading, a contact point closing, stick turning to slip) that the tangent
+          // does not see. A few short steps usually cross it; more mean the direction
+          // is useless, and the iteration returns to the best point seen.
+          if (settings.verbose) diagnose(ctrl, base, step, K);
+          if (++misses > 4) {
+            increment = best;
+            evaluate(ctrl, K, R, true);
+            if (settings.verbose)
+              std::fprintf(stderr, "  newton %2d: s = %.4f, stalled at |R| = %.3e N (no descent along the Newton step)\n",
+                           report.iterations, s, target(R).lpNorm<Eigen::Infinity>());
+            return Outcome::stalled;
+          }
+          increment = base + alpha * step;
+        }
+        evaluate(ctrl, K, R, true);
+      }
+      Rs = target(R);
+      if (Rs.norm() < best_norm) {
+        best_norm = Rs.norm();
+        best = increment;
+      }
+      const double norm = Rs.lpNorm<Eigen::Infinity>();
+      const double correction = (alpha * step).lpNorm<Eigen::Infinity>();
+      report.residual = norm;
+      if (settings.verbose)
+        std::fprintf(stderr, "  newton %2d: s = %.4f, |R| = %.3e N, alpha = %.3f, |du| = %.3e m\n", report.iterations, s,
+                     norm, alpha, correction);
+      if (norm <= tolerance || (correction <= settings.displacement_tolerance && norm <= 1e3 * tolerance))
+        return Outcome::converged;
+    }
+    return Outcome::out_of_iterations;
+  }
+
+  // Newton's method for the step from the predictor Δu_0. First on the step itself;
+  // if that stalls, by continuation in the step's initial out-of-balance force R_0 =
+  // R(Δu_0): R(Δu) = (1 − s) R_0 is solved for s rising from 0 (solved by Δu_0) to 1
+  // (the step), in increments that grow after a success and shrink after a stall.
+  // Nothing is committed between the targets: the material and friction history stay
+  // those of the start of the step, so the solution at s = 1 is the step's own, as if
+  // Newton had found it directly. (Sub-steps of the driver, by contrast, commit
+  // intermediate states.) Intermediate targets are solved loosely (1 % of |R_0|).
+  MechanicsStepReport newton(Control ctrl, double load_scale) {
     MechanicsStepReport report;
     fem::SparseMatrix K;
     Eigen::VectorXd R;
     const double tolerance = settings.residual_tolerance * std::max(load_scale, 1.0);
     pairing_within = true;
+    const Eigen::VectorXd start = increment;
     evaluate(ctrl, K, R, true);
-    double norm = R.lpNorm<Eigen::Infinity>();
-    for (int it = 1; it <= settings.max_iterations; ++it) {
-      report.iterations = it;
-      Eigen::VectorXd dy;
-      try {
-        dy = solver.solve(K, R);
-      } catch (const std::exception& e) {
-        report.message = std::string("linear solve failed: ") + e.what();
-        report.residual = norm;
-        return report;
-      }
-      const Eigen::VectorXd step = cons.distribute(dy, /*homogeneous=*/true);
-      const Eigen::VectorXd base = increment;
-      // Backtracking on the Euclidean residual norm. The full step is evaluated with
-      // its tangent (it is accepted almost always); shorter steps first without.
-      double alpha = 1.0;
-      const double norm2 = R.norm();
-      increment = base + step;
+    report.residual = R.lpNorm<Eigen::Infinity>();
+    const Eigen::VectorXd R0 = R;
+    Outcome outcome = report.residual <= tolerance ? Outcome::converged
+                                                   : iterate(ctrl, R0, 1.0, tolerance, settings.max_iterations, K, R, report);
+    if (outcome == Outcome::stalled) {
+      increment = start;
       evaluate(ctrl, K, R, true);
-      if (R.norm() > (1 - 1e-4) * norm2) {
-        for (int ls = 1; ls < 8; ++ls) {
-          alpha *= 0.5;
-          increment = base + alpha * step;
-          evaluate(ctrl, K, R, false);
-          if (R.norm() <= (1 - 1e-4 * alpha) * norm2) break;
-        }
-        evaluate(ctrl, K, R, true);
-        if (settings.verbose && alpha < 0.01) {
-          diagnose(ctrl, base, step, K);
-          increment = base + alpha * step;
+      const double stage_tolerance = std::max(tolerance, 1e-2 * R0.lpNorm<Eigen::Infinity>());
+      double s_done = 0, ds = 0.25;
+      while (outcome != Outcome::failed && report.iterations < settings.max_continuation_iterations) {
+        const double s = std::min(1.0, s_done + ds);
+        const Eigen::VectorXd saved = increment;
+        const int budget = std::min(settings.max_iterations,
+                                    settings.max_continuation_iterations - report.iterations);
+        outcome = iterate(ctrl, R0, s, s == 1.0 ? tolerance : stage_tolerance, budget, K, R, report);
+        if (outcome == Outcome::converged) {
+          if (s == 1.0) break;
+          s_done = s;
+          ds *= 2;
+        } else if (outcome != Outcome::failed) {
+          increment = saved;
           evaluate(ctrl, K, R, true);
+          ds *= 0.25;
+          if (ds < 1.0 / 4096) break;
         }
       }
-      norm = R.lpNorm<Eigen::Infinity>();
-      const double correction = (alpha * step).lpNorm<Eigen::Infinity>();
-      if (settings.verbose)
-        std::fprintf(stderr, "  newton %2d: |R| = %.3e N, alpha = %.3f, |du| = %.3e m\n", it, norm, alpha, correction);
-      if (norm <= tolerance || (correction <= settings.displacement_tolerance && norm <= 1e3 * tolerance)) {
-        report.converged = true;
-        break;
-      }
+      if (outcome != Outcome::converged && outcome != Outcome::failed)
+        report.message = "Newton stalled (continuation in the out-of-balance force reached s = " +
+                         std::to_string(s_done) + "; residual " + std::to_string(report.residual) + " N)";
     }
-    report.residual = norm;
-    if (!report.converged)
+    report.converged = outcome == Outcome::converged;
+    if (outcome == Outcome::out_of_iterations)
       report.message = "Newton did not converge in " + std::to_string(settings.max_iterations) +
-                       " iterations (residual " + std::to_string(norm) + " N)";
+                       " iterations (residual " + std::to_string(report.residual) + " N)";
     if (!pairing_within)
       report.message += std::string(report.message.empty() ? "" : "; ") +
                         "a contact point slid beyond its search margin";
@@ -499,11 +678,15 @@ Mechanics::Mechanics(const fem::Mesh& mesh, std::vector<const materials::Materia
     : impl_(std::make_unique<Impl>(mesh, std::move(body_materials), settings, initial_temperature)),
       positions_(mesh.nodes) {}
 
-Mechanics::~Mechanics() = default;
+Mechanics::~Mechanics() {
+  if (std::getenv("RSW_STATS"))  // EXPTMP
+    std::fprintf(stderr, "gmres: force %d factorizations %d iterations; displacement %d / %d\n", impl_->force_gmres.n_factorizations(),
+                 impl_->force_gmres.n_iterations(), impl_->displacement_gmres.n_factorizations(), impl_->displacement_gmres.n_iterations());
+}
 
 MechanicsStepReport Mechanics::solve_force_step(double force, const Eigen::VectorXd& nodal_temperature) {
   Impl& m = *impl_;
-  m.temperature = nodal_temperature;
+  m.set_temperature(nodal_temperature);
   m.control = Control::force;
   m.force = force;
   m.predict(Control::force, force - force_);
@@ -514,7 +697,7 @@ MechanicsStepReport Mechanics::solve_force_step(double force, const Eigen::Vecto
 
 MechanicsStepReport Mechanics::solve_displacement_step(double w, const Eigen::VectorXd& nodal_temperature) {
   Impl& m = *impl_;
-  m.temperature = nodal_temperature;
+  m.set_temperature(nodal_temperature);
   m.control = Control::displacement;
   m.displacement_constraints.set_value(m.w_dof, w - w_);
   m.displacement_constraints.close();
@@ -536,6 +719,7 @@ void Mechanics::commit() {
   m.last_control = m.control;
   for (int n = 0; n < m.mesh.n_nodes(); ++n)
     m.current.nodes[n] += Eigen::Vector2d(m.increment[2 * n], m.increment[2 * n + 1]);
+  ++m.geometry_generation;
   w_ += m.increment[m.w_dof];
   m.increment.setZero();
   positions_ = m.current.nodes;
@@ -663,7 +847,7 @@ void Mechanics::residual_and_tangent(const Eigen::VectorXd& increment, double fo
                                      const Eigen::VectorXd& nodal_temperature, Eigen::VectorXd& residual,
                                      fem::SparseMatrix& tangent) {
   Impl& m = *impl_;
-  m.temperature = nodal_temperature;
+  m.set_temperature(nodal_temperature);
   m.force = force;
   m.control = Control::force;
   m.increment = increment;

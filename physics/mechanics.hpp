@@ -69,7 +69,8 @@ struct MechanicsSettings {
   // their initial axial position, so that they are held before contact closes.
   // Force-controlled steps never use it.
   double seating_stiffness = 1e3;
-  int max_iterations = 40;
+  int max_iterations = 40;               // per Newton solve (one target of the continuation)
+  int max_continuation_iterations = 200;  // over all targets of a step's continuation
   double residual_tolerance = 1e-7;       // relative to the load scale
   double displacement_tolerance = 1e-13;  // m, on the Newton correction
   int n_gauss = 2;

@@ -361,8 +361,6 @@ struct Thermal::Impl {
   void group_kernel(int g, fem::LocalSystem& local, double* interface_power) {
     const auto [p, f] = groups[g];
     const auto& pairing = (*contact->pairings)[p];
-    const int n_local = static_cast<int>(local.vector.size());
-    Eigen::VectorXd jump(n_local), mean(n_local);
     for (int k = 0; k < pairing.n_gauss(); ++k) {
       const int i = f * pairing.n_gauss() + k;
       const auto& pt = pairing.points()[i];
@@ -371,21 +369,21 @@ struct Thermal::Impl {
       if (!pt.paired || (h == 0 && q_s == 0)) continue;
       const int lm0 = pairing.local_index(f, pt.master_nodes[0]), lm1 = pairing.local_index(f, pt.master_nodes[1]);
       if (lm0 < 0 || lm1 < 0) continue;  // outside the pattern: no coupling
-      jump.setZero();
-      mean.setZero();
-      for (int s = 0; s < 2; ++s) {
-        const int ls = pairing.local_index(f, pt.slave_nodes[s]);
-        const int lm = s == 0 ? lm0 : lm1;
-        jump[ls] += pt.slave_weights[s];
-        jump[lm] -= pt.master_weights[s];
-        mean[ls] += 0.5 * pt.slave_weights[s];  // the half/half split of q_s
-        mean[lm] += 0.5 * pt.master_weights[s];
-      }
+      // The point's four nodes (two slave, two master): local index, jump weight
+      // (T_s − T_m) and weight of the half/half split of q_s.
+      const std::array<int, 4> node{pairing.local_index(f, pt.slave_nodes[0]), pairing.local_index(f, pt.slave_nodes[1]),
+                                    lm0, lm1};
+      const std::array<double, 4> jump{pt.slave_weights[0], pt.slave_weights[1], -pt.master_weights[0],
+                                       -pt.master_weights[1]};
+      const std::array<double, 4> mean{0.5 * pt.slave_weights[0], 0.5 * pt.slave_weights[1],
+                                       0.5 * pt.master_weights[0], 0.5 * pt.master_weights[1]};
       const double T_s = pt.slave_weights[0] * T[pt.slave_nodes[0]] + pt.slave_weights[1] * T[pt.slave_nodes[1]];
       const double T_m = pt.master_weights[0] * T[pt.master_nodes[0]] + pt.master_weights[1] * T[pt.master_nodes[1]];
       const double A = pt.area;
-      local.vector.noalias() -= h * (T_s - T_m) * A * jump - q_s * A * mean;
-      local.matrix.noalias() += h * A * jump * jump.transpose();
+      for (int a = 0; a < 4; ++a) {
+        local.vector[node[a]] -= h * (T_s - T_m) * A * jump[a] - q_s * A * mean[a];
+        for (int b = 0; b < 4; ++b) local.matrix(node[a], node[b]) += h * A * jump[a] * jump[b];
+      }
       if (interface_power) *interface_power += q_s * A;
     }
   }

@@ -376,6 +376,11 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
         return fail("weld stage, step " + std::to_string(k) + " (t = " + std::to_string(t * 1e3) +
                     " ms), thermal: " + report.message);
       change = (thermal.temperature() - T_iter).lpNorm<Eigen::Infinity>();
+      if (std::getenv("RSW_VERBOSE")) {  // DIAGTMP
+        Eigen::Index wn; (thermal.temperature() - T_iter).cwiseAbs().maxCoeff(&wn);
+        std::fprintf(stderr, "  coupling %d: change %.3e K at node %ld (%.4f, %.4f) T %.2f -> %.2f, committed %.2f, prev %.2f\n", it, change, (long)wn,
+                     mesh.nodes[wn].x()*1e3, mesh.nodes[wn].y()*1e3, T_iter[wn], thermal.temperature()[wn], thermal.committed_temperature()[wn], 0.0);
+      }
       T_iter = thermal.temperature();
       if (I == 0.0 || change <= problem.solver.coupling_tolerance) break;
     }
