@@ -249,6 +249,11 @@ ConfigSchema build_schema() {
       .range(Range::closed(1, 1000))
       .doc("Cap on the electro-thermal coupling iterations of one time step; reaching it "
            "fails the run with the step named.");
+  s.integer("solver.coupling_acceleration_depth").default_value("5")
+      .range(Range::closed(0, 50))
+      .doc("Anderson acceleration depth of the electro-thermal fixed-point iteration (SUNDIALS "
+           "KINSOL): the last this-many iterates are combined; 0 is plain (Picard) iteration, "
+           "which diverges where the current crowds into a heating contact edge.");
 
   s.section("output", "What a run writes.");
   s.string("output.directory").default_value("results")
@@ -465,6 +470,7 @@ Problem make_problem(const Config& config) {
   solver.contact_smoothing = config.number("solver.contact_smoothing");
   solver.coupling_tolerance = config.number("solver.coupling_tolerance");
   solver.max_coupling_iterations = config.integer("solver.max_coupling_iterations");
+  solver.coupling_acceleration_depth = config.integer("solver.coupling_acceleration_depth");
 
   problem.output.directory = config.text("output.directory");
   if (problem.output.directory.empty()) {

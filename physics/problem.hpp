@@ -70,6 +70,7 @@ struct SolverSettings {
   double contact_smoothing = 0;       // m, delta of the C1 penalty law
   double coupling_tolerance = 0;      // K, electro-thermal fixed-point tolerance
   int max_coupling_iterations = 0;
+  int coupling_acceleration_depth = 5;  // Anderson depth (0: plain fixed-point iteration)
 };
 
 struct OutputSettings {

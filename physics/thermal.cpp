@@ -71,6 +71,7 @@ struct Thermal::Impl {
   std::vector<char> melt_state;        // per cell Gauss point: k = λ_m this step (sharp switch)
   std::vector<double> conductivity_q;  // k per cell Gauss point, at the solve's starting field
   bool new_step = true;
+  bool start_given = false;            // set_start() before the next solve
   contact::BondingState bonding, trial_bonding;
   std::vector<std::vector<double>> conductance;  // per pairing point, last evaluation
   std::vector<double> JxW;                       // per cell Gauss point, current configuration
@@ -530,11 +531,8 @@ ThermalStepReport Thermal::solve(double dt, const std::vector<fem::Point>& posit
   // start from the step's last factorisation.
   bool refactor = m.new_step || !m.factorized;
   const bool first_solve_of_step = m.new_step;
-  if (m.new_step) {
-    m.T = m.T_old;
-    // Predictor: linear extrapolation of the last two committed fields.
-    if (m.settings.extrapolate && m.previous_dt > 0) m.T += (m.T_old - m.T_previous) * (dt / m.previous_dt);
-  }
+  if (m.new_step && !m.start_given) m.T = predicted_temperature(dt);
+  m.start_given = false;
   // Fixed values and hanging nodes exactly satisfied; Newton corrections keep them.
   m.T = m.constraints.distribute(m.constraints.restrict_to_free(m.T));
   m.new_step = false;
@@ -607,8 +605,24 @@ ThermalStepReport Thermal::solve(double dt, const std::vector<fem::Point>& posit
   return report;
 }
 
+Eigen::VectorXd Thermal::predicted_temperature(double dt) const {
+  const Impl& m = *impl_;
+  Eigen::VectorXd T = m.T_old;
+  if (m.settings.extrapolate && m.previous_dt > 0) T += (m.T_old - m.T_previous) * (dt / m.previous_dt);
+  return T;
+}
+
+void Thermal::set_start(const Eigen::VectorXd& nodal_temperature) {
+  Impl& m = *impl_;
+  if (nodal_temperature.size() != m.mesh.n_nodes())
+    throw std::invalid_argument("Thermal::set_start: one temperature per node expected");
+  m.T = nodal_temperature;
+  m.start_given = true;
+}
+
 void Thermal::commit() {
   Impl& m = *impl_;
+  m.start_given = false;
   m.T_previous = m.T_old;
   m.previous_dt = m.dt;
   m.T_old = m.T;

@@ -151,11 +151,22 @@ class Thermal {
 
   // One backward Euler step of length dt (s) from the committed field, with the
   // bulk Joule heat per cell Gauss point (W/m³, cell-major, may be empty) and the
-  // interface Joule heat per pairing point (W/m², may be empty). Repeated calls before
-  // commit() (staggered coupling) start from the previous call's result.
+  // interface Joule heat per pairing point (W/m², may be empty). The first call of a
+  // step starts from predicted_temperature(dt); repeated calls before commit()
+  // (staggered coupling) start from the previous call's result, or from the field
+  // given to set_start().
   ThermalStepReport solve(double dt, const std::vector<fem::Point>& positions, const contact::ContactState& contact,
                           const std::vector<double>& joule_heat,
                           const std::vector<std::vector<double>>& interface_heat);
+  // The field a new step of length dt starts from: the linear extrapolation of the
+  // last two committed fields (the committed field at the first step or without
+  // `extrapolate`).
+  Eigen::VectorXd predicted_temperature(double dt) const;
+  // The next solve of this step starts from `nodal_temperature` and evaluates its
+  // coefficients (k, h; at the step's first solve also the λ_m switch) there: a
+  // coupling iteration that relaxes or accelerates the temperature hands its iterate
+  // over this way.
+  void set_start(const Eigen::VectorXd& nodal_temperature);
   // Accepts the last solve: committed T, peak T and bonded points move forward.
   void commit();
 

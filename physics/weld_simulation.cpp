@@ -12,6 +12,7 @@
 #include "physics/thermal.hpp"
 
 #include "fem/fe_values.hpp"
+#include "fem/fixed_point.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -352,43 +353,64 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
     const double t = times[k], dt = times[k] - times[k - 1];
     const double I = problem.schedule.current.at(t);
     const contact::ContactState contact = contact_state(mech);
-    Eigen::VectorXd T_iter = thermal.committed_temperature();
-    int it = 0;
-    double change = 0;
-    for (it = 1; it <= problem.solver.max_coupling_iterations; ++it) {
+    // Electro-thermal fixed point of the step, T = G(T): the electrical field with
+    // σ(T) and h_e at T, then the thermal step with that Joule heat, its coefficients
+    // (k, HTC) also at T. Anderson-accelerated (KINSOL): plain iteration runs away
+    // where the current crowds into a contact edge that heats, softens and conducts
+    // better. Converged when an iterate changes by at most coupling_tolerance; the
+    // thermal and electrical states then belong to the last evaluated T.
+    Eigen::VectorXd T_iter = thermal.predicted_temperature(dt);
+    std::string coupling_failure;
+    auto coupled_step = [&](const Eigen::VectorXd& T_in, Eigen::VectorXd& T_out) {
       std::vector<double> joule;
       std::vector<std::vector<double>> interface_heat;
       if (I != 0.0) {
         clock.start("electrical");
         try {
-          const auto& sol = electrical.solve(mech.positions(), T_iter, I, contact, thermal.bonding());
+          const auto& sol = electrical.solve(mech.positions(), T_in, I, contact, thermal.bonding());
           joule = sol.joule_heat;
           interface_heat = sol.interface_heat;
         } catch (const std::exception& e) {
-          return fail("weld stage, step " + std::to_string(k) + " (t = " + std::to_string(t * 1e3) +
-                      " ms), electrical: " + e.what());
+          coupling_failure = std::string("electrical: ") + e.what();
+          return false;
         }
         have_electrical = true;
       }
       clock.start("thermal");
+      thermal.set_start(T_in);
       const auto report = thermal.solve(dt, mech.positions(), contact, joule, interface_heat);
-      if (!report.converged)
-        return fail("weld stage, step " + std::to_string(k) + " (t = " + std::to_string(t * 1e3) +
-                    " ms), thermal: " + report.message);
-      change = (thermal.temperature() - T_iter).lpNorm<Eigen::Infinity>();
-      if (std::getenv("RSW_VERBOSE")) {  // DIAGTMP
-        Eigen::Index wn; (thermal.temperature() - T_iter).cwiseAbs().maxCoeff(&wn);
-        std::fprintf(stderr, "  coupling %d: change %.3e K at node %ld (%.4f, %.4f) T %.2f -> %.2f, committed %.2f, prev %.2f\n", it, change, (long)wn,
-                     mesh.nodes[wn].x()*1e3, mesh.nodes[wn].y()*1e3, T_iter[wn], thermal.temperature()[wn], thermal.committed_temperature()[wn], 0.0);
+      if (!report.converged) {
+        coupling_failure = "thermal: " + report.message;
+        return false;
       }
-      T_iter = thermal.temperature();
-      if (I == 0.0 || change <= problem.solver.coupling_tolerance) break;
+      T_out = thermal.temperature();
+      if (std::getenv("RSW_VERBOSE"))
+        std::fprintf(stderr, "  coupling: change %.3e K\n", (T_out - T_in).lpNorm<Eigen::Infinity>());
+      return true;
+    };
+    int it = 1;
+    if (I == 0.0) {
+      // No current: no coupling; one thermal step.
+      Eigen::VectorXd T_out;
+      if (!coupled_step(T_iter, T_out))
+        return fail("weld stage, step " + std::to_string(k) + " (t = " + std::to_string(t * 1e3) + " ms), " +
+                    coupling_failure);
+    } else {
+      fem::FixedPointSettings fp;
+      fp.depth = problem.solver.coupling_acceleration_depth;
+      fp.tolerance = problem.solver.coupling_tolerance;
+      fp.max_iterations = problem.solver.max_coupling_iterations;
+      const fem::FixedPointReport coupling = fem::solve_fixed_point(coupled_step, T_iter, fp);
+      it = coupling.iterations;
+      if (!coupling.converged)
+        return fail("weld stage, step " + std::to_string(k) + " (t = " + std::to_string(t * 1e3) + " ms), " +
+                    (coupling_failure.empty()
+                         ? "electro-thermal coupling did not converge in " +
+                               std::to_string(problem.solver.max_coupling_iterations) + " iterations (last change " +
+                               std::to_string(coupling.change) + " K)"
+                         : coupling_failure));
     }
-    if (it > problem.solver.max_coupling_iterations)
-      return fail("weld stage, step " + std::to_string(k) + " (t = " + std::to_string(t * 1e3) +
-                  " ms): electro-thermal coupling did not converge in " +
-                  std::to_string(problem.solver.max_coupling_iterations) + " iterations (last change " +
-                  std::to_string(change) + " K)");
+    T_iter = thermal.temperature();
     last_coupling = std::min(it, problem.solver.max_coupling_iterations);
     result.n_coupling_iterations += last_coupling;
     // Energy bookkeeping of the step (backward Euler: end-of-step power times dt).

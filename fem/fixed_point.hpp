@@ -1,0 +1,46 @@
+// Anderson-accelerated fixed-point iteration u = G(u), the one wrapper around
+// SUNDIALS KINSOL (strategy KIN_FP) in rsw.
+//
+// Plain (Picard) iteration u_{k+1} = G(u_k) converges only where G contracts; it
+// diverges, slowly and monotonically, along any mode whose gain exceeds 1. Anderson
+// acceleration of depth m (Walker & Ni 2011, SIAM J. Numer. Anal. 49:1715; KINSOL's
+// implementation: Lott, Walker, Woodward & Yang 2012) takes the combination of the last
+// m+1 evaluations G(u_j) whose residuals f_j = G(u_j) − u_j best cancel in the least-
+// squares sense:
+//     u_{k+1} = G(u_k) − Σ_i γ_i ΔG_i,   γ = argmin |f_k − Σ_i γ_i Δf_i|₂,
+// a multisecant quasi-Newton step that also finds fixed points that plain iteration
+// runs away from. Depth 0 is plain iteration.
+//
+// Stopping (KINSOL's test for KIN_FP): the ∞-norm of the change of the iterate,
+// |u_{k+1} − u_k|_∞ ≤ tolerance, in the units of u. On success `u` holds the last
+// point G was evaluated at (u_k), so the caller's state from that evaluation (G(u_k)
+// and whatever produced it) belongs to the returned point.
+#pragma once
+
+#include <Eigen/Dense>
+
+#include <functional>
+#include <string>
+
+namespace rsw::fem {
+
+struct FixedPointSettings {
+  int depth = 5;             // Anderson depth m (0: plain fixed-point iteration)
+  double tolerance = 1e-8;   // on |u_{k+1} − u_k|_∞, units of u
+  int max_iterations = 50;   // evaluations of G
+};
+
+struct FixedPointReport {
+  bool converged = false;
+  int iterations = 0;        // evaluations of G
+  double change = 0;         // |u_{k+1} − u_k|_∞ of the last iteration
+  std::string message;       // why it stopped, if not converged
+};
+
+// G(u, g) writes g = G(u) and returns true, or false if G cannot be evaluated at u
+// (the iteration then stops, not converged). `u` is the start on entry and the last
+// evaluated point on return.
+using FixedPointMap = std::function<bool(const Eigen::VectorXd& u, Eigen::VectorXd& g)>;
+FixedPointReport solve_fixed_point(const FixedPointMap& G, Eigen::VectorXd& u, const FixedPointSettings& settings);
+
+}  // namespace rsw::fem
