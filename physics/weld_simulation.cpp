@@ -348,6 +348,26 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
     ++next_output;
   }
   const double current_end = problem.schedule.current.time.back();
+  // An electrode that melts (sticking, alloying with the sheet) is outside the model:
+  // the run stops with this reason rather than failing later in the coupling or the
+  // mechanics of a molten cap. It happens only for contact parameters far from the
+  // physical range (e.g. a film resistance t_f·ρ_c near 10⁻⁹ Ω·m² at the electrode).
+  auto electrode_melting = [&](const Eigen::VectorXd& T) -> std::string {
+    for (int n = 0; n < mesh.n_nodes(); ++n) {
+      const int b = mesh.node_body[n];
+      if (std::find(sheet_bodies.begin(), sheet_bodies.end(), b) != sheet_bodies.end()) continue;
+      if (!(T[n] < solidus[b])) {
+        char text[320];
+        std::snprintf(text, sizeof text,
+                      "%s reaches %.0f degC at (r, z) = (%.2f, %.2f) mm, above the solidus of its material "
+                      "(%.0f degC): a melting electrode is outside the model (contact parameters too resistive?)",
+                      mesh.body_names[b].c_str(), T[n], mech.positions()[n].x() * 1e3, mech.positions()[n].y() * 1e3,
+                      solidus[b]);
+        return text;
+      }
+    }
+    return {};
+  };
   double nugget_energy_fraction = std::nan("");
   for (std::size_t k = 1; k < times.size(); ++k) {
     const double t = times[k], dt = times[k] - times[k - 1];
@@ -402,6 +422,9 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
       fp.max_iterations = problem.solver.max_coupling_iterations;
       const fem::FixedPointReport coupling = fem::solve_fixed_point(coupled_step, T_iter, fp);
       it = coupling.iterations;
+      if (!coupling.converged && !electrode_melting(thermal.temperature()).empty())
+        return fail("weld stage, step " + std::to_string(k) + " (t = " + std::to_string(t * 1e3) + " ms): " +
+                    electrode_melting(thermal.temperature()));
       if (!coupling.converged)
         return fail("weld stage, step " + std::to_string(k) + " (t = " + std::to_string(t * 1e3) + " ms), " +
                     (coupling_failure.empty()
@@ -411,6 +434,8 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
                          : coupling_failure));
     }
     T_iter = thermal.temperature();
+    if (const std::string melting = electrode_melting(T_iter); !melting.empty())
+      return fail("weld stage, step " + std::to_string(k) + " (t = " + std::to_string(t * 1e3) + " ms): " + melting);
     last_coupling = std::min(it, problem.solver.max_coupling_iterations);
     result.n_coupling_iterations += last_coupling;
     // Energy bookkeeping of the step (backward Euler: end-of-step power times dt).
