@@ -2,6 +2,8 @@
 // evaluation cache, then the SIR posterior in physical units; see calibrate.hpp.
 #include "calibration/calibrate.hpp"
 
+#include "calibration/features.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -76,6 +78,29 @@ std::string format_theta(const ParameterSpace& parameters, const Eigen::VectorXd
     text << (i ? ", " : "") << parameters.parameter(i).name << " = " << theta[static_cast<Eigen::Index>(i)];
   }
   return text.str();
+}
+
+// Why a run whose features are NaN (undefined for its signals' shape, features.hpp)
+// has no likelihood: "feature R_beta undefined: <condition>", features with the same
+// condition joined ("features R_beta, t_beta undefined: ..."), clauses by "; ".
+// "" if every feature the likelihood uses is finite.
+std::string undefined_features_reason(const std::vector<std::string>& names, const Eigen::VectorXd& values) {
+  std::vector<std::pair<std::vector<std::string>, std::string>> groups;  // names, condition
+  for (std::size_t j = 0; j < names.size(); ++j) {
+    if (!std::isnan(values[static_cast<Eigen::Index>(j)])) continue;
+    std::string condition = why_undefined(names[j]);
+    if (condition.empty()) condition = "the model returned NaN";
+    if (groups.empty() || groups.back().second != condition) groups.push_back({{}, condition});
+    groups.back().first.push_back(names[j]);
+  }
+  std::string reason;
+  for (const auto& [group, condition] : groups) {
+    std::string joined;
+    for (const auto& name : group) joined += (joined.empty() ? "" : ", ") + name;
+    reason += (reason.empty() ? "" : "; ") + std::string(group.size() == 1 ? "feature " : "features ") + joined +
+              " undefined: " + condition;
+  }
+  return reason;
 }
 
 // u → θ for the rows of a matrix.
@@ -228,6 +253,15 @@ CalibrationResult Calibration::run() const {
     std::size_t n_failed = 0;
     for (CalibrationEvaluation& run : runs) {
       run.log_likelihood = not_a_number;
+      if (run.ok) {
+        // A run that leaves a likelihood feature undefined (NaN) is a failed run for
+        // the calibration: recorded with the reason, excluded from the GP.
+        const std::string undefined = undefined_features_reason(design_.feature_names, run.features);
+        if (!undefined.empty()) {
+          run.ok = false;
+          run.failure_reason = undefined;
+        }
+      }
       if (run.ok) {
         try {
           run.log_likelihood = likelihood_.log_likelihood(run.features);

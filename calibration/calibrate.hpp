@@ -10,7 +10,11 @@
 // Each batch of points SBALC asks for is mapped u → θ (physical, ParameterSpace) and
 // run through the EvaluationFarm (farm.hpp: worker processes in parallel, each result
 // appended to an HDF5 file as it finishes, failures recorded with their reason and
-// returned to SBALC as failed evaluations). The posterior is then the SIR resample of
+// returned to SBALC as failed evaluations). A run that succeeds but leaves a feature of
+// the likelihood undefined (NaN: its signals lack the shape the feature needs, e.g. no
+// interior resistance peak; features.hpp) has no likelihood value: it is treated as a
+// failed run, recorded with the reason "feature R_beta undefined: <condition>", and kept
+// out of the GP. The posterior is then the SIR resample of
 // SBALC's prior pool with weights ∝ exp m(u) (Smith & Gelfand 1992; posterior.hpp),
 // reported in physical units: weighted mean and standard deviation of θ, equal-tailed
 // credible intervals (the u-quantiles mapped through the monotone u → θ_i), the MAP
@@ -75,10 +79,10 @@ struct CalibrationEvaluation {
   std::size_t batch = 0;          // SBALC's evaluator call (0: the initial design)
   Eigen::VectorXd theta_unit;     // u ∈ [0,1]^d
   Eigen::VectorXd theta;          // physical θ, parameter units
-  bool ok = false;
-  Eigen::VectorXd features;       // SI; NaN unless ok
+  bool ok = false;                // the run succeeded and every likelihood feature is defined
+  Eigen::VectorXd features;       // SI; all NaN if the run failed, some NaN if it left features undefined
   double log_likelihood = 0.0;    // ln L(θ); NaN unless ok
-  std::string failure_reason;     // empty when ok
+  std::string failure_reason;     // empty when ok; "feature X undefined: ..." for undefined features
   double wall_time = 0.0;         // [s] of the run
   bool reused = false;            // found in the evaluation cache (resume)
 };

@@ -432,6 +432,11 @@ Observations features_of_signal_files(const std::vector<fs::path>& files, const 
                                join_names(values.names()) + "); features that are not in the signals (nugget "
                                "geometry, say) need observations.features_file");
       }
+      const std::string undefined = values.undefined_reason(feature_names[j]);
+      if (!undefined.empty()) {
+        throw ObservationError(name + ": feature '" + feature_names[j] + "' is undefined for this signal: " +
+                               undefined + "; an observation needs every feature of the calibration");
+      }
       observations.values(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(j)) = values.at(feature_names[j]);
     }
     observations.replicate_sources.push_back(name);

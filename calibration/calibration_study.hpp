@@ -91,7 +91,8 @@ Observations read_features_file(const std::filesystem::path& file, const std::ve
 
 // The features of each signal file (read_signal_csv, extract_features with `settings`),
 // one replicate per file. Throws ObservationError naming the file and the feature a file
-// cannot give (nugget features, say, are not in signals).
+// cannot give (nugget features, say, are not in signals) or leaves undefined (its shape,
+// e.g. no interior resistance peak, with the reason).
 Observations features_of_signal_files(const std::vector<std::filesystem::path>& files,
                                       const std::vector<std::string>& feature_names,
                                       const FeatureSettings& settings = {});

@@ -260,8 +260,10 @@ void close_descriptors_of(const fs::path& file) {
           record.failure_reason = "the model returned " + std::to_string(record.features.size()) +
                                   " feature values, the study has " + std::to_string(n_features);
         } else {
+          // NaN is an undefined feature of a valid run (the study keeps the run); ±∞ is
+          // a failure of the model.
           for (std::size_t k = 0; k < n_features; ++k) {
-            if (!std::isfinite(record.features[static_cast<Eigen::Index>(k)])) {
+            if (std::isinf(record.features[static_cast<Eigen::Index>(k)])) {
               record.ok = false;
               record.failure_reason = "feature '" + feature_names[k] + "' is not finite (" +
                                       number_text(record.features[static_cast<Eigen::Index>(k)]) + ")";

@@ -34,8 +34,12 @@
 // and hold only values computed by the model, so a serial, parallel, resumed, MPI or
 // merged study gives identical arrays.
 //
-// Failures are values: a model failure, an exception thrown by evaluate(), a crashed
-// worker and a run that exceeds the time limit are all recorded with their reason.
+// Failures are values: a model failure, an exception thrown by evaluate(), an infinite
+// feature value, a crashed worker and a run that exceeds the time limit are all
+// recorded with their reason. A NaN feature value is not a failure: it is a feature
+// that this run's signals leave undefined (features.hpp, "Undefined features"; e.g. no
+// interior resistance peak), so the run is ok, the NaN is stored as is (HDF5 NaN), and
+// each analysis uses the runs where the feature it needs is finite.
 // Errors of the study itself (a file holding another design, an unwritable file) throw
 // FarmError.
 #pragma once
@@ -102,7 +106,7 @@ struct RunRecord {
   std::size_t index = 0;           // row of the design
   bool ok = false;
   Eigen::VectorXd theta;           // physical θ
-  Eigen::VectorXd features;        // y (size n_features; NaN when !ok)
+  Eigen::VectorXd features;        // y (size n_features; NaN when !ok, or undefined when ok)
   std::string failure_reason;      // empty when ok
   double wall_time = 0;            // [s] of the evaluation in its worker
   int rank = 0;                    // MPI rank that evaluated it (0 without MPI)
@@ -187,7 +191,8 @@ struct StudyResults {
   std::vector<int> swept_parameter;    // empty unless one-at-a-time
   enum class Status { pending = -1, failed = 0, ok = 1 };
   std::vector<Status> status;          // per point
-  Eigen::MatrixXd features;            // n_points × n_features, NaN unless ok
+  Eigen::MatrixXd features;            // n_points × n_features, NaN unless ok; NaN in an
+                                       // ok row: a feature that run leaves undefined
   Eigen::VectorXd wall_time;           // [s], NaN unless run
   std::vector<std::string> failure_reasons;  // per point, empty unless failed
   std::vector<int> rank;               // per point, −1 unless run

@@ -1,10 +1,13 @@
 // Feature extraction from weld signals; definitions in features.hpp (MODEL.md §10,
 // El Ouafi et al. 2012 for the dynamic-resistance geometry, paper §2.2 for the
-// displacement and temperature features).
+// displacement and temperature features), including which features a curve's shape
+// leaves undefined (NaN with the reason) and which input errors throw.
 #include "calibration/features.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <map>
 #include <sstream>
 
 namespace rsw::calibration {
@@ -83,35 +86,54 @@ void add_resistance_features(const Signal& signal, const WeldStage& stage, doubl
   }
   const SmoothCurve window = curve.trimmed(t_s, t_e);
   const double tolerance = 1e-9 * step;
-
-  const CurvePoint beta = window.maximum();
-  if (beta.time <= t_s + tolerance || beta.time >= t_e - tolerance) {
-    throw FeatureError("the dynamic resistance has no peak inside the trimmed weld stage [" +
-                       milliseconds(t_s - stage.start) + ", " + milliseconds(t_e - stage.start) +
-                       "] (its maximum is at the " +
-                       std::string(beta.time <= t_s + tolerance ? "start" : "end") +
-                       "), so R_beta, R_alpha, m_1 and m_2 are undefined");
-  }
-  const CurvePoint steepest = window.trimmed(t_s, beta.time).maximum_slope();
-  if (!(steepest.value > 0)) {
-    throw FeatureError("the dynamic resistance does not rise before its peak, so the first "
-                       "inflection R_alpha is undefined");
-  }
-  const double r_alpha = window.value(steepest.time);
   const double r_gamma = window.value(t_e);
 
   namespace f = feature_name;
-  features.add(f::resistance_alpha, r_alpha);
-  features.add(f::resistance_beta, beta.value);
-  features.add(f::resistance_gamma, r_gamma);
-  features.add(f::time_alpha, steepest.time - stage.start);
-  features.add(f::time_beta, beta.time - stage.start);
-  features.add(f::time_gamma, t_e - stage.start);
-  features.add(f::slope_before_peak, (beta.value - r_alpha) / (beta.time - steepest.time));
-  features.add(f::slope_after_peak, (r_gamma - beta.value) / (t_e - beta.time));
-  features.add(f::resistance_mean, window.mean());
-  features.add(f::resistance_rise, beta.value - r_alpha);
-  features.add(f::resistance_drop, r_gamma - beta.value);
+  // Each feature's value, or NaN and the reason it is undefined; added in the fixed order.
+  std::map<std::string, double> value;
+  std::map<std::string, std::string> reason;
+  value[f::resistance_gamma] = r_gamma;
+  value[f::time_gamma] = t_e - stage.start;
+  value[f::resistance_mean] = window.mean();
+
+  const CurvePoint beta = window.maximum();
+  const bool at_start = beta.time <= t_s + tolerance;
+  if (at_start || beta.time >= t_e - tolerance) {
+    const std::string why =
+        "the dynamic resistance has no peak inside the trimmed weld stage [" + milliseconds(t_s - stage.start) +
+        ", " + milliseconds(t_e - stage.start) + "]; its maximum is at the " +
+        (at_start ? "start: it falls from the start" : "end: it still rises at the end");
+    for (const char* name : {f::resistance_beta, f::time_beta, f::resistance_alpha, f::time_alpha,
+                             f::slope_before_peak, f::slope_after_peak, f::resistance_rise, f::resistance_drop}) {
+      reason[name] = why;
+    }
+  } else {
+    value[f::resistance_beta] = beta.value;
+    value[f::time_beta] = beta.time - stage.start;
+    value[f::slope_after_peak] = (r_gamma - beta.value) / (t_e - beta.time);
+    value[f::resistance_drop] = r_gamma - beta.value;
+    const CurvePoint steepest = window.trimmed(t_s, beta.time).maximum_slope();
+    if (!(steepest.value > 0)) {
+      const std::string why = "the dynamic resistance does not rise before its peak at " +
+                              milliseconds(beta.time - stage.start) + ", so it has no first inflection";
+      for (const char* name : {f::resistance_alpha, f::time_alpha, f::slope_before_peak, f::resistance_rise}) {
+        reason[name] = why;
+      }
+    } else {
+      const double r_alpha = window.value(steepest.time);
+      value[f::resistance_alpha] = r_alpha;
+      value[f::time_alpha] = steepest.time - stage.start;
+      value[f::slope_before_peak] = (beta.value - r_alpha) / (beta.time - steepest.time);
+      value[f::resistance_rise] = beta.value - r_alpha;
+    }
+  }
+  for (const std::string& name : resistance_feature_names()) {
+    if (reason.count(name)) {
+      features.add_undefined(name, reason[name]);
+    } else {
+      features.add(name, value.at(name));
+    }
+  }
 }
 
 // The curve of `column` over the whole record, up to the record end of features.hpp.
@@ -144,16 +166,21 @@ void add_displacement_features(const Signal& signal, const WeldStage& stage, dou
   const SmoothCurve after_start = curve.trimmed(t_s, curve.end());
   const double s_0 = curve.value(t_s);
   const CurvePoint peak = after_start.maximum();
-  if (peak.time <= t_s + 1e-9 * step) {
-    throw FeatureError("the electrode displacement does not rise after the weld start "
-                       "(its maximum after trimming is at the start), so S_dot_exp is undefined");
-  }
   const double s_end = curve.value(curve.end());
   namespace f = feature_name;
+  // No rise: dS_P = 0 (peak.value = S_0) is a measured "no expansion", still defined.
   features.add(f::displacement_peak_expansion, peak.value - s_0);
   features.add(f::displacement_end, s_end);
   features.add(f::displacement_net, s_end - s_0);
-  features.add(f::displacement_expansion_rate, curve.trimmed(t_s, peak.time).fit_slope());
+  if (peak.time <= t_s + 1e-9 * step) {
+    features.add_undefined(f::displacement_expansion_rate,
+                           "the electrode displacement does not rise after the weld start: its maximum on [" +
+                               milliseconds(settings.trim_margin) + ", " + milliseconds(curve.end() - stage.start) +
+                               "] is at " + milliseconds(settings.trim_margin) +
+                               ", so there is no expansion phase to fit a rate to");
+  } else {
+    features.add(f::displacement_expansion_rate, curve.trimmed(t_s, peak.time).fit_slope());
+  }
 }
 
 void add_temperature_features(const Signal& signal, const WeldStage& stage, double step,
@@ -162,17 +189,19 @@ void add_temperature_features(const Signal& signal, const WeldStage& stage, doub
   const SmoothCurve curve =
       record_curve(signal, signal_column::temperature, stage, step, settings, filter);
   const CurvePoint peak = curve.maximum();
-  if (peak.time >= curve.end() - 1e-9 * step) {
-    throw FeatureError("the sheet temperature peaks at the end of the record, so there is no "
-                       "cooling interval for T_dot_cool");
-  }
   const double t_end = curve.end();
   const double temperature_end = curve.value(t_end);
   namespace f = feature_name;
   features.add(f::temperature_max, peak.value);
   features.add(f::time_temperature_max, peak.time - stage.start);
   features.add(f::temperature_end, temperature_end);
-  features.add(f::cooling_rate, (temperature_end - peak.value) / (t_end - peak.time));
+  if (peak.time >= t_end - 1e-9 * step) {
+    features.add_undefined(f::cooling_rate, "the sheet temperature peaks at the end of the record, " +
+                                                milliseconds(t_end - stage.start) +
+                                                " after the weld start, so there is no cooling interval");
+  } else {
+    features.add(f::cooling_rate, (temperature_end - peak.value) / (t_end - peak.time));
+  }
 }
 
 }  // namespace
@@ -247,10 +276,47 @@ WeldStage find_weld_stage(const Signal& signal, double current_fraction) {
   return stage;
 }
 
+std::string why_undefined(const std::string& name) {
+  namespace f = feature_name;
+  static const std::map<std::string, std::string> conditions = [] {
+    const std::string no_peak = "the dynamic resistance has no peak inside the trimmed weld stage";
+    std::map<std::string, std::string> c;
+    for (const char* name : {f::resistance_beta, f::time_beta, f::slope_after_peak, f::resistance_drop}) {
+      c[name] = no_peak;
+    }
+    for (const char* name : {f::resistance_alpha, f::time_alpha, f::slope_before_peak, f::resistance_rise}) {
+      c[name] = no_peak + ", or does not rise before it";
+    }
+    c[f::displacement_expansion_rate] = "the electrode displacement does not rise after the weld start";
+    c[f::cooling_rate] = "the sheet temperature peaks at the end of the record, so there is no cooling interval";
+    return c;
+  }();
+  const auto it = conditions.find(name);
+  return it == conditions.end() ? std::string() : it->second;
+}
+
 void FeatureValues::add(const std::string& name, double value) {
   if (has(name)) throw FeatureError("feature '" + name + "' is given twice");
+  if (!std::isfinite(value)) {
+    throw FeatureError("feature '" + name + "' is not finite (" + number(value) + ")");
+  }
   names_.push_back(name);
   values_.push_back(value);
+}
+
+void FeatureValues::add_undefined(const std::string& name, const std::string& reason) {
+  if (has(name)) throw FeatureError("feature '" + name + "' is given twice");
+  if (reason.empty()) throw FeatureError("feature '" + name + "' is undefined without a reason");
+  names_.push_back(name);
+  values_.push_back(std::numeric_limits<double>::quiet_NaN());
+  undefined_.push_back({name, reason});
+}
+
+std::string FeatureValues::undefined_reason(const std::string& name) const {
+  for (const auto& entry : undefined_) {
+    if (entry.name == name) return entry.reason;
+  }
+  return "";
 }
 
 bool FeatureValues::has(const std::string& name) const {

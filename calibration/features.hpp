@@ -20,11 +20,12 @@
 //    current pauses are rejected). The curve covers the weld stage; trimming 2 ms at
 //    each end gives the analysis window [t_s, t_e] = [t_ws + 2 ms, t_we − 2 ms]. After
 //    El Ouafi et al. (2012):
-//      β: global maximum of R on the window (R_beta, t_beta); it must lie strictly inside;
+//      β: global maximum of R on the window (R_beta, t_beta); it must lie strictly inside
+//         (else β is undefined, see "Undefined features" below);
 //      α: first inflection, defined as the point of steepest rise dR/dt on [t_s, t_β]
 //         (the maximum of the smoothed slope, located on the curve; if the slope is
 //         largest at t_s the inflection lies before the window and α = t_s). It must
-//         have dR/dt > 0 (a rising part before the peak);
+//         have dR/dt > 0 (a rising part before the peak), else α is undefined;
 //      γ: end of the window, t_gamma = t_e, R_gamma = R(t_e);
 //      m_1 = (R_β − R_α)/(t_β − t_α), m_2 = (R_γ − R_β)/(t_γ − t_β) [Ω/s] (chords);
 //      R_m = mean of R over the window; dR_1 = R_β − R_α; dR_2 = R_γ − R_β.
@@ -42,9 +43,26 @@
 //      T_dot_cool = (T_end − T_max)/(t_end − t_T_max) [K/s], negative while cooling.
 // 6. Nugget scalars (d_n_liq, ...) are passed through unchanged when given.
 // The record end is the last grid sample at or before min(last sample, t_we +
-// post_weld_window). A group whose column is absent is left out; a group whose column
-// is present but whose feature is undefined (no interior resistance peak, no rise of S
-// after the weld start, no cooling interval) throws FeatureError with the reason.
+// post_weld_window). A group whose column is absent is left out.
+//
+// Undefined features. A valid signal whose curve has an unusual shape leaves some
+// features without a definition; those, and only those, are reported as NaN with the
+// reason, and every other feature keeps its value (a study or calibration decides per
+// feature what to do with a NaN, instead of losing the whole weld):
+//   - no resistance peak inside [t_s, t_e] (the maximum is at t_s: R falls from the
+//     start; or at t_e: R still rises at the end): R_beta, t_beta, R_alpha, t_alpha,
+//     m_1, m_2, dR_1, dR_2 are undefined; R_gamma, t_gamma and R_m are defined;
+//   - an interior peak but no rise before it (max dR/dt ≤ 0 on [t_s, t_β]): R_alpha,
+//     t_alpha, m_1, dR_1 are undefined;
+//   - S does not rise after t_ws + 2 ms (its maximum is there): S_dot_exp (a slope over
+//     an empty expansion phase) is undefined; dS_P = 0 (no expansion is a measured
+//     value, not a missing one), S_end and dS_net are defined;
+//   - T peaks at the record end (still heating): T_dot_cool is undefined; T_max,
+//     t_T_max and T_end are defined.
+// Input errors throw FeatureError (or SignalError from the reader) with the reason: no
+// current column or no current pulse, a signal or weld stage too short for the
+// smoothing window and the trimming, current pauses in a voltage-only signal, no
+// column to extract from, a non-finite nugget scalar.
 #pragma once
 
 #include "calibration/signal.hpp"
@@ -123,27 +141,53 @@ struct WeldStage {
 // Step 1 above; throws FeatureError.
 WeldStage find_weld_stage(const Signal& signal, double current_fraction);
 
-// Named feature values in a fixed order.
+// A feature that the signal's shape leaves undefined, and why (see above).
+struct UndefinedFeature {
+  std::string name;
+  std::string reason;  // e.g. "the dynamic resistance has no peak inside ...; its maximum is at the start: ..."
+};
+
+// Named feature values in a fixed order. An undefined feature keeps its place in the
+// order with the value NaN, and its reason is listed in undefined(): a NaN here always
+// means "undefined for this signal's shape", never a numerical accident.
 class FeatureValues {
  public:
-  // Throws FeatureError on a duplicate name.
+  // Throws FeatureError on a duplicate name or a non-finite value.
   void add(const std::string& name, double value);
+  // Adds `name` with the value NaN and the reason; throws FeatureError on a duplicate
+  // name or an empty reason.
+  void add_undefined(const std::string& name, const std::string& reason);
   std::size_t size() const { return names_.size(); }
   const std::vector<std::string>& names() const { return names_; }
-  const std::vector<double>& values() const { return values_; }
+  const std::vector<double>& values() const { return values_; }  // NaN for undefined features
+  // The undefined features with their reasons, in the order of names().
+  const std::vector<UndefinedFeature>& undefined() const { return undefined_; }
   bool has(const std::string& name) const;
-  // Throws FeatureError naming the features that exist.
+  // The reason `name` is undefined; "" if it is defined (or absent).
+  std::string undefined_reason(const std::string& name) const;
+  // NaN for an undefined feature; throws FeatureError naming the features that exist
+  // for a name that was not extracted at all.
   double at(const std::string& name) const;
-  // The values of `names`, in that order (for a ForwardModel's feature vector).
+  // The values of `names`, in that order (for a ForwardModel's feature vector); NaN
+  // for undefined features, FeatureError for absent ones, as at().
   Eigen::VectorXd select(const std::vector<std::string>& names) const;
 
  private:
   std::vector<std::string> names_;
   std::vector<double> values_;
+  std::vector<UndefinedFeature> undefined_;
 };
 
+// Under which condition the feature `name` is undefined for a valid signal, in general
+// terms (the list above), e.g. "the electrode displacement does not rise after the weld
+// start" for S_dot_exp; "" for features that are always defined and for names that are
+// not features of §10. For reports that see only a stored NaN, such as a study's results
+// or a calibration run; extract_features() gives the specific reason of one signal.
+std::string why_undefined(const std::string& name);
+
 // All features of §10 that `signal` supports, then the `scalars` (nugget geometry, in
-// the order given). Throws FeatureError or SignalError with the reason.
+// the order given). Features that the curves' shapes leave undefined are NaN with their
+// reason in undefined(); input errors throw FeatureError or SignalError with the reason.
 FeatureValues extract_features(const Signal& signal, const FeatureSettings& settings = {},
                                const std::vector<std::pair<std::string, double>>& scalars = {});
 

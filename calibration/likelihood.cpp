@@ -99,9 +99,13 @@ double GaussianLikelihood::log_likelihood(const Eigen::VectorXd& model_features)
   if (model_features.size() != static_cast<Eigen::Index>(feature_names_.size()))
     throw std::invalid_argument("GaussianLikelihood: " + std::to_string(model_features.size()) +
                                 " model features for " + std::to_string(feature_names_.size()) + " observed ones");
-  for (Eigen::Index j = 0; j < model_features.size(); ++j)
+  for (Eigen::Index j = 0; j < model_features.size(); ++j) {
+    if (std::isnan(model_features(j)))
+      throw std::invalid_argument("GaussianLikelihood: feature '" + feature_names_[j] +
+                                  "' is undefined (NaN) for this run, so the run has no likelihood");
     if (!std::isfinite(model_features(j)))
       throw std::invalid_argument("GaussianLikelihood: non-finite model value of feature '" + feature_names_[j] + "'");
+  }
   const Eigen::MatrixXd residuals = observations_.rowwise() - model_features.transpose();
   const double quadratic = (residuals.array().square().rowwise() / variances_.transpose().array()).sum();
   return -0.5 * quadratic + log_normalisation_;

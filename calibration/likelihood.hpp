@@ -46,7 +46,10 @@ class GaussianLikelihood {
   GaussianLikelihood(std::vector<std::string> feature_names, Eigen::MatrixXd observations, ObservationNoise noise,
                      const std::map<std::string, double>& discrepancy_variances = {});
 
-  // Model features in the order of feature_names().
+  // Model features in the order of feature_names(). A NaN (a feature the run's signals
+  // leave undefined, features.hpp) or infinite value has no likelihood: throws
+  // std::invalid_argument naming the feature; the calibration records such a run as
+  // failed (calibrate.hpp), it never reaches the GP.
   double log_likelihood(const Eigen::VectorXd& model_features) const;
   // Model features by name; may contain more features than observed ones (ignored).
   // Throws std::invalid_argument naming the first observed feature that is missing.

@@ -1,6 +1,7 @@
 // `rsw study ...` and `rsw features FILE`: see study_commands.hpp. The run table
 // <name>_runs.csv / .json (one row per design point: status, wall time, θ, features,
-// failure reason) is written whenever a study file is complete, after `run` or `merge`.
+// failure reason, the undefined features of a successful run) is written whenever a
+// study file is complete, after `run` or `merge`.
 #include "tools/study_commands.hpp"
 
 #include "calibration/farm.hpp"
@@ -82,7 +83,16 @@ void write_text(const fs::path& path, const std::string& text) {
   if (!out) throw std::runtime_error("cannot write '" + path.string() + "'");
 }
 
-// <name>_runs.csv and <name>_runs.json in the output folder.
+// Why feature `name` is NaN in a successful run (features.hpp, "Undefined features").
+std::string undefined_feature_reason(const std::string& name) {
+  const std::string why = cal::why_undefined(name);
+  return why.empty() ? "the model returned NaN" : why;
+}
+
+// <name>_runs.csv and <name>_runs.json in the output folder. A successful run whose
+// signal's shape leaves features undefined has them as nan (CSV) / null (JSON), their
+// names in the CSV column undefined_features (space-separated) and names with reasons
+// in the JSON object "undefined_features".
 std::vector<fs::path> write_run_tables(const cal::Study& study, const cal::StudyResults& results) {
   const auto& names = results.parameter_names;
   const auto& features = results.feature_names;
@@ -95,13 +105,14 @@ std::vector<fs::path> write_run_tables(const cal::Study& study, const cal::Study
     const std::string unit = cal::describe_feature(name).unit;
     csv << "," << csv_text(unit.empty() ? name : name + " [" + unit + "]");
   }
-  csv << ",failure_reason\n";
+  csv << ",failure_reason,undefined_features\n";
   Json runs = Json::array();
   for (std::size_t i = 0; i < results.n_points(); ++i) {
     const auto ii = static_cast<Eigen::Index>(i);
     csv << i << "," << status_name(results.status[i]) << "," << csv_number(results.wall_time[ii]) << ","
         << results.rank[i];
-    Json theta = Json::object(), y = Json::object();
+    Json theta = Json::object(), y = Json::object(), undefined = Json::object();
+    std::string undefined_names;
     for (std::size_t j = 0; j < names.size(); ++j) {
       csv << "," << csv_number(results.points(ii, static_cast<Eigen::Index>(j)));
       theta[names[j]] = results.points(ii, static_cast<Eigen::Index>(j));
@@ -110,11 +121,16 @@ std::vector<fs::path> write_run_tables(const cal::Study& study, const cal::Study
       const double value = results.features(ii, static_cast<Eigen::Index>(k));
       csv << "," << csv_number(value);
       y[features[k]] = std::isfinite(value) ? Json(value) : Json(nullptr);
+      if (results.status[i] == cal::StudyResults::Status::ok && std::isnan(value)) {
+        undefined_names += (undefined_names.empty() ? "" : " ") + features[k];
+        undefined[features[k]] = undefined_feature_reason(features[k]);
+      }
     }
-    csv << "," << csv_text(results.failure_reasons[i]) << "\n";
+    csv << "," << csv_text(results.failure_reasons[i]) << "," << csv_text(undefined_names) << "\n";
     Json run = {{"index", i}, {"status", status_name(results.status[i])}, {"theta", theta}, {"features", y}};
     run["wall_time"] = std::isfinite(results.wall_time[ii]) ? Json(results.wall_time[ii]) : Json(nullptr);
     if (results.status[i] == cal::StudyResults::Status::failed) run["failure_reason"] = results.failure_reasons[i];
+    if (!undefined.empty()) run["undefined_features"] = undefined;
     if (!results.swept_parameter.empty()) {
       const int swept = results.swept_parameter[i];
       run["swept_parameter"] = swept < 0 ? Json(nullptr) : Json(names[static_cast<std::size_t>(swept)]);
@@ -131,10 +147,26 @@ std::vector<fs::path> write_run_tables(const cal::Study& study, const cal::Study
   return {csv_path, json_path};
 }
 
+// The failed runs with their reasons, then per feature the successful runs that leave
+// it undefined (NaN), e.g. "  R_beta undefined in 7 ok runs (the dynamic resistance ...)".
 void print_failures(const cal::StudyResults& results) {
   for (std::size_t i = 0; i < results.n_points(); ++i) {
     if (results.status[i] == cal::StudyResults::Status::failed) {
       std::cout << "  failed run " << i << ": " << results.failure_reasons[i] << "\n";
+    }
+  }
+  for (std::size_t k = 0; k < results.feature_names.size(); ++k) {
+    std::size_t n_undefined = 0;
+    for (std::size_t i = 0; i < results.n_points(); ++i) {
+      if (results.status[i] == cal::StudyResults::Status::ok &&
+          std::isnan(results.features(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k)))) {
+        ++n_undefined;
+      }
+    }
+    if (n_undefined > 0) {
+      const std::string& name = results.feature_names[k];
+      std::cout << "  " << name << " undefined in " << n_undefined << " ok run" << (n_undefined == 1 ? "" : "s")
+                << " (" << undefined_feature_reason(name) << ")\n";
     }
   }
 }
@@ -249,6 +281,13 @@ void print_features(const FeaturesOptions& options) {
     const std::string& name = values.names()[k];
     const double value = values.values()[k];
     const cal::FeatureInfo info = cal::describe_feature(name);
+    const std::string reason = values.undefined_reason(name);
+    if (!reason.empty()) {
+      // The signal is valid but its shape leaves this feature undefined (features.hpp).
+      std::printf("  %-12s %-13s undefined (%s)\n", name.c_str(), info.group.c_str(), reason.c_str());
+      features[name] = {{"value", nullptr}, {"unit", info.unit}, {"group", info.group}, {"reason", reason}};
+      continue;
+    }
     const std::string shown_unit = display_unit(info);
     const double shown = info.unit.empty() ? value : fem::convert_units(value, info.unit, shown_unit);
     std::printf("  %-12s %-13s %14.6g %s\n", name.c_str(), info.group.c_str(), shown, shown_unit.c_str());

@@ -9,8 +9,9 @@
 //   + (k + 1) θ_1, a deterministic function whose every value is bit-reproducible.
 // Behaviour switches act on θ_1 (the first parameter): above fail_above the run returns
 // a failure; above throw_above evaluate() throws; above crash_above the process aborts;
-// above hang_above it sleeps for an hour (for run time limits). Every evaluation first
-// sleeps `delay` seconds.
+// above hang_above it sleeps for an hour (for run time limits); above undefined_above
+// the run succeeds but its first feature is NaN (undefined, as a weld feature whose
+// signal lacks the shape it needs). Every evaluation first sleeps `delay` seconds.
 #pragma once
 
 #include "calibration/forward_model.hpp"
@@ -38,6 +39,7 @@ struct AnalyticBehaviour {
   double throw_above = std::numeric_limits<double>::infinity();
   double crash_above = std::numeric_limits<double>::infinity();
   double hang_above = std::numeric_limits<double>::infinity();
+  double undefined_above = std::numeric_limits<double>::infinity();
 };
 
 enum class AnalyticFunction { ishigami, smooth };
@@ -83,6 +85,7 @@ class AnalyticModel : public calibration::ForwardModel {
         y[k] = sum;
       }
     }
+    if (first > behaviour_.undefined_above) y[0] = std::numeric_limits<double>::quiet_NaN();
     return calibration::EvaluationResult::success(y);
   }
 
@@ -102,7 +105,7 @@ inline fem::ConfigSchema analytic_case_schema() {
       .doc("The analytic function.");
   s.number("analytic.delay", "s", "ms").default_value("0 ms").range(fem::Range::closed(0, 1e6))
       .doc("Sleep before each evaluation.");
-  for (const char* key : {"fail_above", "throw_above", "crash_above", "hang_above"}) {
+  for (const char* key : {"fail_above", "throw_above", "crash_above", "hang_above", "undefined_above"}) {
     s.number(std::string("analytic.") + key, "1", "1").default_value("1e300")
         .doc("Threshold on the first parameter for this misbehaviour.");
   }
@@ -118,6 +121,7 @@ inline std::unique_ptr<calibration::ForwardModel> make_analytic_model(const cali
   behaviour.throw_above = config.number("analytic.throw_above");
   behaviour.crash_above = config.number("analytic.crash_above");
   behaviour.hang_above = config.number("analytic.hang_above");
+  behaviour.undefined_above = config.number("analytic.undefined_above");
   const AnalyticFunction function =
       config.text("analytic.function") == "ishigami" ? AnalyticFunction::ishigami : AnalyticFunction::smooth;
   return std::make_unique<AnalyticModel>(function, study.parameter_space().names(), study.feature_names(),

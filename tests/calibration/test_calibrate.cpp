@@ -5,6 +5,8 @@
 //     (verification; prints its figures);
 //   - a calibration killed with SIGKILL mid-batch and resumed reuses every finished run
 //     and ends bit for bit like an uninterrupted one; an existing folder needs resume;
+//   - a run that leaves a likelihood feature undefined (NaN) is a failed run with the
+//     reason, outside the GP; an observed signal with an undefined feature is an error;
 //   - observations from signal files and from a features file of the same values give
 //     the same likelihood; replicate scatter, relative and given noise, discrepancy;
 //   - bad observation files and bad calibration keys are errors naming the file, line,
@@ -28,6 +30,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -67,6 +70,22 @@ class LinearModel : public ForwardModel {
   Eigen::MatrixXd a_;
   Eigen::VectorXd b_;
   double delay_;
+};
+
+// The linear model whose feature y2 is undefined (NaN) for p > p_undefined, as a weld
+// feature whose signal lacks the shape it needs.
+class PartlyUndefinedLinearModel : public LinearModel {
+ public:
+  PartlyUndefinedLinearModel(Eigen::MatrixXd a, Eigen::VectorXd b, double p_undefined)
+      : LinearModel(std::move(a), std::move(b)), p_undefined_(p_undefined) {}
+  EvaluationResult evaluate(const Eigen::VectorXd& theta) const override {
+    Eigen::VectorXd y = LinearModel::evaluate(theta).features();
+    if (theta(0) > p_undefined_) y(1) = std::numeric_limits<double>::quiet_NaN();
+    return EvaluationResult::success(y);
+  }
+
+ private:
+  double p_undefined_;
 };
 
 // The linear-Gaussian problem with p ~ U[2, 6], q ~ U[−1, 1] (box volume V = 8), three
@@ -286,6 +305,118 @@ TEST(Calibrate, ResumeRefusesRunsOfAnotherModelSetUp) {
     ADD_FAILURE() << "runs of another model set-up were reused";
   } catch (const CalibrationError& e) {
     EXPECT_NE(std::string(e.what()).find("holds runs of another set-up: remove it to start again"), std::string::npos)
+        << e.what();
+  }
+  fs::remove_all(dir);
+}
+
+TEST(Calibrate, RunWithUndefinedLikelihoodFeatureIsAFailedRunOutsideTheGp) {
+  const fs::path dir = fresh_dir("undefined_feature");
+  const LinearGaussianProblem problem;
+  // y2 undefined above p = 5.2: the initial Hammersley design (p = 2.4, 3.2, 4.0, 4.8,
+  // 5.6) has one such run; the posterior mode (p ≈ 4.2) lies where all are defined.
+  const PartlyUndefinedLinearModel model(problem.a, problem.b, 5.2);
+  CalibrationOptions options = test_options(dir / "evaluations");
+  options.sbalc.max_evaluations = 14;
+  const CalibrationResult result = Calibration(model, problem.design(), problem.likelihood(), options).run();
+
+  std::size_t n_undefined = 0, n_ok = 0;
+  for (const CalibrationEvaluation& run : result.evaluations) {
+    if (run.theta(0) > 5.2) {
+      ++n_undefined;
+      EXPECT_FALSE(run.ok);
+      EXPECT_EQ(run.failure_reason, "feature y2 undefined: the model returned NaN");
+      EXPECT_TRUE(std::isnan(run.log_likelihood));
+      EXPECT_TRUE(std::isnan(run.features(1)));
+      EXPECT_TRUE(std::isfinite(run.features(0)));  // the defined features are kept
+    } else {
+      ++n_ok;
+      EXPECT_TRUE(run.ok) << run.failure_reason;
+      EXPECT_TRUE(std::isfinite(run.log_likelihood));
+    }
+  }
+  EXPECT_GE(n_undefined, 1u);
+  EXPECT_EQ(result.n_failed, n_undefined);
+  // Only the runs with a likelihood are in the GP, and none of its values is NaN.
+  EXPECT_EQ(static_cast<std::size_t>(result.design_unit.rows()), n_ok);
+  EXPECT_TRUE(result.design_log_likelihoods.allFinite());
+  EXPECT_TRUE(result.mean.allFinite());
+
+  // The farm's files keep those runs as ok runs with the NaN (a study would use their
+  // defined features); only the likelihood treats them as failed.
+  std::size_t n_stored_nan = 0;
+  for (const auto& entry : fs::directory_iterator(dir / "evaluations")) {
+    const StudyResults stored = read_study_results(entry.path());
+    for (std::size_t i = 0; i < stored.n_points(); ++i) {
+      EXPECT_EQ(stored.status[i], StudyResults::Status::ok);
+      if (std::isnan(stored.features(static_cast<Eigen::Index>(i), 1))) ++n_stored_nan;
+    }
+  }
+  EXPECT_EQ(n_stored_nan, n_undefined);
+
+  // Resumed, the cached runs go through the same check.
+  options.farm.resume = true;
+  const CalibrationResult resumed = Calibration(model, problem.design(), problem.likelihood(), options).run();
+  EXPECT_EQ(resumed.n_reused, resumed.n_evaluations);
+  EXPECT_EQ(resumed.n_failed, n_undefined);
+  fs::remove_all(dir);
+}
+
+TEST(Calibrate, UndefinedFeaturesWithTheSameConditionShareOneReason) {
+  // Weld features that are NaN are explained by the condition that leaves them
+  // undefined (features.hpp, why_undefined), grouped by condition.
+  class NoPeakModel : public ForwardModel {
+   public:
+    std::vector<std::string> parameter_names() const override { return {"p", "q"}; }
+    std::vector<std::string> feature_names() const override { return {"R_beta", "t_beta", "R_m"}; }
+    EvaluationResult evaluate(const Eigen::VectorXd& theta) const override {
+      const double nan = std::numeric_limits<double>::quiet_NaN();
+      if (theta(0) > 5.0) return EvaluationResult::success(Eigen::Vector3d(nan, nan, 150e-6 + 1e-6 * theta(1)));
+      return EvaluationResult::success(Eigen::Vector3d(180e-6 + 1e-6 * theta(0), 0.05 + 0.001 * theta(1), 150e-6));
+    }
+  };
+  const fs::path dir = fresh_dir("no_peak");
+  StudyDesign design = LinearGaussianProblem().design();
+  design.feature_names = {"R_beta", "t_beta", "R_m"};
+  const Eigen::MatrixXd observed = (Eigen::MatrixXd(2, 3) << 184e-6, 0.05, 150e-6, 185e-6, 0.0502, 150.5e-6).finished();
+  const GaussianLikelihood likelihood(design.feature_names, observed, ObservationNoise::relative(0.05));
+  CalibrationOptions options = test_options(dir / "evaluations");
+  options.sbalc.max_evaluations = 6;
+  const CalibrationResult result = Calibration(NoPeakModel(), design, likelihood, options).run();
+  std::size_t n_failed = 0;
+  for (const CalibrationEvaluation& run : result.evaluations) {
+    if (run.ok) continue;
+    ++n_failed;
+    EXPECT_EQ(run.failure_reason,
+              "features R_beta, t_beta undefined: the dynamic resistance has no peak inside the trimmed weld stage");
+  }
+  EXPECT_GE(n_failed, 1u);
+  fs::remove_all(dir);
+}
+
+TEST(CalibrationStudy, ObservedSignalWithAnUndefinedFeatureIsAnErrorWithTheReason) {
+  const fs::path dir = fresh_dir("undefined_observation");
+  // Resistance falling over the whole weld: no peak, so R_beta is undefined; R_gamma is not.
+  std::ostringstream text;
+  text << "time [ms], current [kA], voltage [V]\n";
+  for (int k = 0; k <= 800; ++k) {
+    const double t = -20.0 + 0.2 * k;
+    const double current = t < 0 || t > 120 ? 0.0 : 8.0;
+    const double resistance = 200.0 - 0.5 * std::max(t, 0.0);  // µΩ
+    char row[96];
+    std::snprintf(row, sizeof row, "%.1f, %.3f, %.8f\n", t, current, current * resistance * 1e-3);
+    text << row;
+  }
+  const fs::path falling = write_file(dir / "falling.csv", text.str());
+  const Observations defined = features_of_signal_files({falling}, {"R_gamma", "R_m"});
+  EXPECT_TRUE(defined.values.allFinite());
+  try {
+    features_of_signal_files({falling}, {"R_gamma", "R_beta"});
+    ADD_FAILURE() << "an undefined observed feature was accepted";
+  } catch (const ObservationError& e) {
+    EXPECT_NE(std::string(e.what()).find(falling.string() + ": feature 'R_beta' is undefined for this signal: the "
+                                         "dynamic resistance has no peak inside the trimmed weld stage"),
+              std::string::npos)
         << e.what();
   }
   fs::remove_all(dir);

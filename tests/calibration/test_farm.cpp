@@ -1,7 +1,8 @@
 // The evaluation farm (calibration/farm.*): parallel worker processes give the same
 // results as one; a study killed with SIGKILL and resumed equals an uninterrupted one
 // without repeating finished runs; failures of every kind (returned, thrown, crashed,
-// hung) are recorded with their reason and the study finishes; array-job partitions
+// hung, an infinite feature) are recorded with their reason and the study finishes; a
+// run with an undefined (NaN) feature is ok and keeps its NaN; array-job partitions
 // merge into the full study; an MPI run with two ranks equals a local run.
 // The models are the analytic ones of analytic_models.hpp.
 #include "calibration/designs.hpp"
@@ -256,6 +257,52 @@ TEST(Farm, FailingModelRecordsFailuresAndFinishes) {
   EXPECT_EQ(kinds["crash"], 2);
   EXPECT_EQ(kinds["throw"], 2);
   EXPECT_EQ(kinds["fail"], 3);
+  fs::remove_all(dir);
+}
+
+TEST(Farm, RunWithUndefinedFeatureIsOkAndStoresNaNButInfiniteValueFails) {
+  const fs::path dir = fresh_dir("undefined");
+  // LHS with 20 points: 8 with a > 0.6 leave y1 undefined (NaN), of which the 2 with
+  // a > 0.9 are failures through y2 = +inf instead; 12 are ordinary.
+  class ShapeModel : public ForwardModel {
+   public:
+    std::vector<std::string> parameter_names() const override { return {"a", "b", "c"}; }
+    std::vector<std::string> feature_names() const override { return {"y1", "y2"}; }
+    EvaluationResult evaluate(const Eigen::VectorXd& theta) const override {
+      const double a = theta[0];
+      const double y1 = a > 0.6 ? std::numeric_limits<double>::quiet_NaN() : a + theta[1];
+      const double y2 = a > 0.9 ? std::numeric_limits<double>::infinity() : a * theta[2];
+      return EvaluationResult::success(Eigen::Vector2d(y1, y2));
+    }
+  };
+  const StudyDesign design = unit_design(20);
+  const ShapeModel model;
+  const FarmSummary summary = EvaluationFarm(model, design, dir / "undefined.h5", quiet_options(2)).run();
+  EXPECT_EQ(summary.n_ok, 18u);
+  EXPECT_EQ(summary.n_failed, 2u);
+
+  // Read back from the HDF5 file: the NaN is stored as NaN in an ok row.
+  const StudyResults results = read_study_results(dir / "undefined.h5");
+  std::size_t n_undefined = 0;
+  for (std::size_t i = 0; i < results.n_points(); ++i) {
+    const auto ii = static_cast<Eigen::Index>(i);
+    const double a = results.points(ii, 0);
+    if (a > 0.9) {
+      EXPECT_EQ(results.status[i], StudyResults::Status::failed);
+      EXPECT_EQ(results.failure_reasons[i], "feature 'y2' is not finite (inf)");
+      continue;
+    }
+    EXPECT_EQ(results.status[i], StudyResults::Status::ok) << results.failure_reasons[i];
+    EXPECT_EQ(results.failure_reasons[i], "");
+    EXPECT_EQ(results.features(ii, 1), a * results.points(ii, 2));
+    if (a > 0.6) {
+      EXPECT_TRUE(std::isnan(results.features(ii, 0)));
+      ++n_undefined;
+    } else {
+      EXPECT_EQ(results.features(ii, 0), a + results.points(ii, 1));
+    }
+  }
+  EXPECT_EQ(n_undefined, 6u);
   fs::remove_all(dir);
 }
 

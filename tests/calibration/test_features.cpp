@@ -2,7 +2,11 @@
 // Savitzky–Golay filter against its closed form, the weld-stage detection, and every
 // feature group on synthetic welds whose curves are cubics in time, so the expected
 // values follow analytically (the filter and the Hermite curve reproduce cubics
-// exactly). Also the CSV reader: units, errors, and like-for-like features.
+// exactly). Curves of unusual shape (resistance without interior peak, displacement
+// that never rises, temperature still rising at the end) leave exactly the features
+// that need the missing shape undefined (NaN with a reason), the others keep their
+// closed-form values; input errors still throw. Also the CSV reader: units, errors,
+// and like-for-like features.
 #include "calibration/features.hpp"
 #include "calibration/signal.hpp"
 
@@ -14,6 +18,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <limits>
 #include <random>
 #include <sstream>
 #include <string>
@@ -71,6 +77,8 @@ struct SyntheticOptions {
   bool voltage = true;  // else a resistance column
   bool displacement = true;
   bool temperature = true;
+  std::function<double(double)> displacement_curve = ::rsw::calibration::displacement;  // S(τ) [m]
+  std::function<double(double)> temperature_curve = ::rsw::calibration::temperature;    // T(τ) [°C]
 };
 
 Signal synthetic_weld(const ResistanceShape& shape, const SyntheticOptions& options = {}) {
@@ -83,8 +91,8 @@ Signal synthetic_weld(const ResistanceShape& shape, const SyntheticOptions& opti
     current[i] = weld_current(t);
     resistance[i] = shape.value(tau);
     voltage[i] = resistance[i] * current[i];
-    s[i] = displacement(tau);
-    temp[i] = temperature(tau);
+    s[i] = options.displacement_curve(tau);
+    temp[i] = options.temperature_curve(tau);
   }
   Signal signal(time);
   signal.add_column(signal_column::current, "A", current);
@@ -311,15 +319,71 @@ TEST(DynamicResistance, ResistanceColumnGivesTheSameFeaturesAsVoltage) {
   }
 }
 
-TEST(DynamicResistance, MonotoneResistanceHasNoPeakAndSaysSo) {
-  ResistanceShape rising;
-  rising.tau_a = 90e-3;  // steepest at 90 ms, peak at 130 ms: past the weld end
-  try {
-    extract_features(synthetic_weld(rising), half_current_threshold());
-    FAIL() << "a resistance still rising at the weld end was given a peak";
-  } catch (const FeatureError& error) {
-    EXPECT_NE(std::string(error.what()).find("no peak"), std::string::npos) << error.what();
+// The features without a definition when R has no interior peak, and the others.
+const std::vector<std::string> peak_features = {"R_beta", "t_beta", "R_alpha", "t_alpha",
+                                                "m_1",    "m_2",    "dR_1",    "dR_2"};
+
+std::vector<std::string> undefined_names(const FeatureValues& features) {
+  std::vector<std::string> names;
+  for (const auto& entry : features.undefined()) names.push_back(entry.name);
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+std::vector<std::string> sorted(std::vector<std::string> names) {
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+TEST(DynamicResistance, FallingResistanceLeavesPeakFeaturesUndefinedWithReasonAndKeepsEndAndMean) {
+  // Steepest rise at τ = −50 ms and peak at −10 ms, before the weld: over the weld stage
+  // R falls monotonically from about 152 to 108 µΩ.
+  ResistanceShape falling;
+  falling.k = 0.05;
+  falling.tau_a = -50e-3;
+  const FeatureValues features = extract_features(synthetic_weld(falling), half_current_threshold());
+  namespace f = feature_name;
+  EXPECT_EQ(undefined_names(features), sorted(peak_features));
+  for (const auto& name : peak_features) {
+    EXPECT_TRUE(std::isnan(features.at(name))) << name;
+    const std::string reason = features.undefined_reason(name);
+    EXPECT_NE(reason.find("the dynamic resistance has no peak inside the trimmed weld stage [2 ms, 98 ms]"),
+              std::string::npos) << name << ": " << reason;
+    EXPECT_NE(reason.find("its maximum is at the start"), std::string::npos) << reason;
+    EXPECT_EQ(reason.rfind(why_undefined(f::resistance_beta), 0), 0u) << reason;  // the general condition first
   }
+  // R_gamma, t_gamma and R_m do not need a peak: their closed-form values.
+  const double t_gamma = (weld_end - weld_start) - 2e-3, t_s = 2e-3;
+  expect_relative(features.at(f::resistance_gamma), falling.value(t_gamma), 1e-9, "R_gamma");
+  EXPECT_NEAR(features.at(f::time_gamma), t_gamma, 1e-12);
+  expect_relative(features.at(f::resistance_mean),
+                  (falling.antiderivative(t_gamma) - falling.antiderivative(t_s)) / (t_gamma - t_s), 1e-9, "R_m");
+  // The order of the names does not change; select() gives NaN in place.
+  EXPECT_EQ(features.names().front(), f::resistance_alpha);
+  const Eigen::VectorXd selected = features.select({f::resistance_gamma, f::resistance_beta, f::temperature_max});
+  EXPECT_TRUE(std::isfinite(selected[0]));
+  EXPECT_TRUE(std::isnan(selected[1]));
+  EXPECT_TRUE(std::isfinite(selected[2]));
+  // The other groups are untouched.
+  EXPECT_TRUE(std::isfinite(features.at(f::displacement_expansion_rate)));
+  EXPECT_TRUE(std::isfinite(features.at(f::cooling_rate)));
+}
+
+TEST(DynamicResistance, ResistanceStillRisingAtTheEndHasNoPeakAndSaysSo) {
+  // Minimum at −10 ms, steepest rise at 50 ms, peak at 110 ms: R rises over the whole
+  // trimmed weld stage [2, 98] ms, from about 109 to 191 µΩ.
+  ResistanceShape rising;
+  rising.k = 0.3;
+  rising.tau_a = 50e-3;
+  rising.s = 60e-3;
+  const FeatureValues features = extract_features(synthetic_weld(rising), half_current_threshold());
+  EXPECT_EQ(undefined_names(features), sorted(peak_features));
+  const std::string reason = features.undefined_reason(feature_name::resistance_beta);
+  EXPECT_NE(reason.find("no peak"), std::string::npos) << reason;
+  EXPECT_NE(reason.find("its maximum is at the end: it still rises at the end"), std::string::npos) << reason;
+  expect_relative(features.at(feature_name::resistance_gamma), rising.value((weld_end - weld_start) - 2e-3), 1e-9,
+                  "R_gamma");
+  EXPECT_TRUE(std::isfinite(features.at(feature_name::resistance_mean)));
 }
 
 TEST(Displacement, FeaturesOfCubicCurveMatchClosedForm) {
@@ -361,6 +425,108 @@ TEST(Temperature, FeaturesOfCubicCurveMatchClosedForm) {
   expect_relative(features.at(f::temperature_end), temperature(tau_end), 1e-12, "T_end");
   expect_relative(features.at(f::cooling_rate),
                   (temperature(tau_end) - t_max) / (tau_end - tau_temperature_peak), 1e-9, "T_dot_cool");
+}
+
+TEST(Displacement, CurveThatNeverRisesHasUndefinedExpansionRateAndZeroPeakExpansion) {
+  // S falls linearly from the weld start: no expansion phase. dS_P = 0 is a value (no
+  // expansion), S_end and dS_net are defined, the rate of an empty phase is not.
+  SyntheticOptions options;
+  options.displacement_curve = [](double tau) { return 2e-6 - 0.2e-3 * tau; };
+  const FeatureValues features = extract_features(synthetic_weld(ResistanceShape{}, options), half_current_threshold());
+  namespace f = feature_name;
+  const double tau_end = record_end - weld_start, t_s = 2e-3;
+  EXPECT_EQ(undefined_names(features), std::vector<std::string>{f::displacement_expansion_rate});
+  EXPECT_TRUE(std::isnan(features.at(f::displacement_expansion_rate)));
+  const std::string reason = features.undefined_reason(f::displacement_expansion_rate);
+  EXPECT_EQ(reason.rfind(why_undefined(f::displacement_expansion_rate), 0), 0u) << reason;
+  EXPECT_NE(reason.find("is at 2 ms"), std::string::npos) << reason;
+  EXPECT_EQ(features.at(f::displacement_peak_expansion), 0.0);
+  expect_relative(features.at(f::displacement_end), 2e-6 - 0.2e-3 * tau_end, 1e-9, "S_end");
+  expect_relative(features.at(f::displacement_net), -0.2e-3 * (tau_end - t_s), 1e-9, "dS_net");
+  EXPECT_TRUE(std::isfinite(features.at(f::resistance_beta)));  // the other groups keep their values
+  EXPECT_TRUE(std::isfinite(features.at(f::cooling_rate)));
+}
+
+TEST(Temperature, TemperatureStillRisingAtTheEndHasUndefinedCoolingRateOnly) {
+  // The cubic of the synthetic weld with its peak at 200 ms, after the record end (120 ms
+  // after the weld start): T rises to the last sample.
+  SyntheticOptions options;
+  const auto rising = [](double tau) {
+    const double p = 200e-3;
+    return 20 + temperature_rise * tau * tau * (3 * p - 2 * tau) / (p * p * p);
+  };
+  options.temperature_curve = rising;
+  const FeatureValues features = extract_features(synthetic_weld(ResistanceShape{}, options), half_current_threshold());
+  namespace f = feature_name;
+  const double tau_end = record_end - weld_start;
+  EXPECT_EQ(undefined_names(features), std::vector<std::string>{f::cooling_rate});
+  const std::string reason = features.undefined_reason(f::cooling_rate);
+  EXPECT_NE(reason.find("the sheet temperature peaks at the end of the record, 120 ms after the weld start"),
+            std::string::npos) << reason;
+  expect_relative(features.at(f::temperature_max), rising(tau_end), 1e-12, "T_max");
+  EXPECT_NEAR(features.at(f::time_temperature_max), tau_end, 1e-12);
+  expect_relative(features.at(f::temperature_end), rising(tau_end), 1e-12, "T_end");
+  EXPECT_TRUE(std::isfinite(features.at(f::resistance_beta)));
+  EXPECT_TRUE(std::isfinite(features.at(f::displacement_expansion_rate)));
+}
+
+TEST(Features, UndefinedFeatureIsNaNWithItsReasonAndKeepsItsPlace) {
+  FeatureValues features;
+  features.add("a", 1.0);
+  features.add_undefined("b", "no peak");
+  features.add("c", 3.0);
+  EXPECT_EQ(features.names(), (std::vector<std::string>{"a", "b", "c"}));
+  ASSERT_EQ(features.undefined().size(), 1u);
+  EXPECT_EQ(features.undefined()[0].name, "b");
+  EXPECT_EQ(features.undefined()[0].reason, "no peak");
+  EXPECT_EQ(features.undefined_reason("b"), "no peak");
+  EXPECT_EQ(features.undefined_reason("a"), "");
+  EXPECT_TRUE(std::isnan(features.at("b")));
+  EXPECT_TRUE(std::isnan(features.values()[1]));
+  const Eigen::VectorXd selected = features.select({"c", "b"});
+  EXPECT_EQ(selected[0], 3.0);
+  EXPECT_TRUE(std::isnan(selected[1]));
+  EXPECT_THROW(features.select({"d"}), FeatureError);  // absent is still an error
+  EXPECT_THROW(features.add_undefined("a", "again"), FeatureError);
+  EXPECT_THROW(features.add_undefined("e", ""), FeatureError);  // a NaN always has a reason
+  EXPECT_THROW(features.add("f", std::numeric_limits<double>::quiet_NaN()), FeatureError);
+  EXPECT_THROW(features.add("g", std::numeric_limits<double>::infinity()), FeatureError);
+}
+
+TEST(Features, WhyUndefinedNamesTheConditionOfExactlyTheShapeDependentFeatures) {
+  std::vector<std::string> conditional;
+  for (const auto* group : {&resistance_feature_names(), &displacement_feature_names(), &temperature_feature_names(),
+                            &nugget_feature_names()}) {
+    for (const auto& name : *group) {
+      if (!why_undefined(name).empty()) conditional.push_back(name);
+    }
+  }
+  std::vector<std::string> expected = peak_features;
+  expected.push_back(feature_name::displacement_expansion_rate);
+  expected.push_back(feature_name::cooling_rate);
+  EXPECT_EQ(sorted(conditional), sorted(expected));
+  EXPECT_EQ(why_undefined("no_such_feature"), "");
+  EXPECT_NE(why_undefined(feature_name::resistance_alpha).find("or does not rise before it"), std::string::npos);
+}
+
+TEST(Features, CurrentPauseInAVoltageOnlySignalIsStillAnError) {
+  // The current drops to zero for 3 ms in the middle of the weld: R = V/I is undefined
+  // there, an input error (pulsed waveforms are not supported), not an undefined feature.
+  Signal weld = synthetic_weld(ResistanceShape{});
+  Eigen::VectorXd current = weld.column(signal_column::current);
+  Eigen::VectorXd voltage = weld.column(signal_column::voltage);
+  for (Eigen::Index i = 0; i < current.size(); ++i) {
+    if (weld.time()[i] >= 50e-3 && weld.time()[i] <= 53e-3) current[i] = voltage[i] = 0;
+  }
+  Signal paused(weld.time());
+  paused.add_column(signal_column::current, "A", current);
+  paused.add_column(signal_column::voltage, "V", voltage);
+  try {
+    extract_features(paused, half_current_threshold());
+    FAIL() << "a current pause was accepted";
+  } catch (const FeatureError& error) {
+    EXPECT_NE(std::string(error.what()).find("current pauses are not supported"), std::string::npos) << error.what();
+  }
 }
 
 TEST(Features, PostWeldWindowMovesTheRecordEnd) {

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -97,6 +98,19 @@ TEST(GaussianLikelihood, MatchesModelFeaturesByNameAndNamesAMissingOne) {
   } catch (const std::invalid_argument& error) {
     EXPECT_NE(std::string(error.what()).find("peak_resistance"), std::string::npos) << error.what();
   }
+}
+
+TEST(GaussianLikelihood, UndefinedModelFeatureHasNoLikelihoodAndNamesTheFeature) {
+  const GaussianLikelihood likelihood(kNames, three_replicates(), ObservationNoise::relative(0.05));
+  try {
+    likelihood.log_likelihood(Eigen::Vector3d(5.2e-3, std::numeric_limits<double>::quiet_NaN(), 0.22e-3));
+    FAIL() << "a NaN model feature must throw";
+  } catch (const std::invalid_argument& error) {
+    EXPECT_NE(std::string(error.what()).find("feature 'peak_resistance' is undefined (NaN) for this run"),
+              std::string::npos) << error.what();
+  }
+  EXPECT_THROW(likelihood.log_likelihood(Eigen::Vector3d(5.2e-3, 149e-6, std::numeric_limits<double>::infinity())),
+               std::invalid_argument);
 }
 
 TEST(GaussianLikelihood, ZeroVarianceIsRejectedNamingTheFeature) {

@@ -1,5 +1,5 @@
-// `rsw features` and `rsw study` as a user runs them, and tools/plot_study.py on their
-// output. The binary is rsw_analytic (tests/calibration/analytic_rsw_main.cpp): the
+// `rsw features` and `rsw study` as a user runs them (including signals and runs whose
+// shape leaves features undefined), and tools/plot_study.py on their output. The binary is rsw_analytic (tests/calibration/analytic_rsw_main.cpp): the
 // same commands (tools/study_commands.cpp) with analytic forward models in place of
 // the weld simulator, so a study takes well under a second.
 #include "calibration/farm.hpp"
@@ -11,7 +11,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -98,6 +100,45 @@ TEST(Features, CliPrintsFeaturesOfShippedSignal) {
   fs::remove_all(dir);
 }
 
+TEST(Features, CliPrintsUndefinedFeaturesWithTheReasonAndExitsZero) {
+  // A valid weld signal of unusual shape, generated here: 8 kA for 120 ms, resistance
+  // falling over the whole weld (no peak), electrode displacement falling (no
+  // expansion), temperature still rising at the record end.
+  const fs::path dir = fresh_dir("undefined");
+  std::string text = "time [ms], current [kA], voltage [V], displacement [mm], temperature [degC]\n";
+  for (int k = 0; k <= 700; ++k) {
+    const double t = -10.0 + 0.2 * k, tw = std::max(t, 0.0);
+    const double current = t < 0 || t > 120 ? 0.0 : 8.0;
+    char row[160];
+    std::snprintf(row, sizeof row, "%.1f, %.3f, %.8f, %.8f, %.4f\n", t, current,
+                  current * (200.0 - 0.5 * tw) * 1e-3, 0.01 - 1e-4 * tw, 20.0 + 10.0 * tw);
+    text += row;
+  }
+  const fs::path signal = write_file(dir / "unusual.csv", text);
+  const fs::path json_path = dir / "unusual.json";
+  const CommandResult r = run_rsw("features " + signal.string() + " -o " + json_path.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("R_beta       resistance    undefined (the dynamic resistance has no peak inside the "
+                          "trimmed weld stage"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("S_dot_exp    displacement  undefined (the electrode displacement does not rise after the "
+                          "weld start"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("T_dot_cool   temperature   undefined (the sheet temperature peaks at the end of the "
+                          "record"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("  R_gamma      resistance    "), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("R_gamma      resistance    undefined"), std::string::npos) << r.output;
+
+  const auto json = nlohmann::json::parse(read_file(json_path));
+  EXPECT_TRUE(json["features"]["R_beta"]["value"].is_null());
+  EXPECT_EQ(json["features"]["R_beta"]["unit"], "ohm");
+  EXPECT_NE(json["features"]["R_beta"]["reason"].get<std::string>().find("no peak"), std::string::npos);
+  EXPECT_TRUE(json["features"]["S_dot_exp"]["value"].is_null());
+  EXPECT_TRUE(json["features"]["T_dot_cool"]["value"].is_null());
+  EXPECT_NEAR(json["features"]["R_gamma"]["value"].get<double>(), 140.91e-6, 0.05e-6);  // 200 − 0.5 · 118.18 µΩ
+  EXPECT_EQ(json["features"]["dS_P"]["value"].get<double>(), 0.0);
+  EXPECT_FALSE(json["features"]["R_gamma"].contains("reason"));
+  fs::remove_all(dir);
+}
+
 TEST(Features, SignalWithoutCurrentPulseIsAClearError) {
   const fs::path dir = fresh_dir("no_pulse");
   std::string text = "time [ms], current [kA], voltage [V]\n";
@@ -133,7 +174,7 @@ TEST(StudyCli, RunResumeAndSensitivityWriteTables) {
   EXPECT_NE(r.output.find("runs 40/40, 2 failed, elapsed "), std::string::npos) << r.output;
   const std::string runs = read_file(out / "small_runs.csv");
   EXPECT_EQ(runs.rfind("index,status,wall_time_s,rank,a [1],p1 [1],c [1],R_beta [ohm],dS_P [m],T_max [degC],d_n_liq [m],"
-                       "failure_reason\n", 0), 0u) << runs;
+                       "failure_reason,undefined_features\n", 0), 0u) << runs;
   EXPECT_TRUE(fs::exists(out / "small_runs.json"));
 
   // Without --resume an existing study is not overwritten; with it nothing is repeated.
@@ -155,6 +196,54 @@ TEST(StudyCli, RunResumeAndSensitivityWriteTables) {
   EXPECT_EQ(json["runs"]["failed"], 2);
   EXPECT_EQ(json["features"].size(), 4u);
   EXPECT_EQ(json["features"][0]["first_order"].size(), 3u);
+  fs::remove_all(dir);
+}
+
+TEST(StudyCli, RunWithUndefinedFeaturesIsOkAndTablesShowNanAndWhy) {
+  // The analytic model leaves its first feature (R_beta) undefined (NaN) for a > 0.5.
+  const fs::path dir = fresh_dir("undefined_runs");
+  const fs::path study = write_lhs_study(dir, "shape", 20);
+  write_file(dir / "case.yaml", "analytic: {function: smooth, undefined_above: 0.5}\n");
+  const fs::path out = dir / "out";
+  CommandResult r = run_rsw("study run " + study.string() + " -q --workers 2 -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("study shape: 20/20 runs done (20 now, 0 before), 0 failed"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("R_beta undefined in 10 ok runs (the dynamic resistance has no peak inside the trimmed "
+                          "weld stage)"), std::string::npos) << r.output;
+
+  const rsw::calibration::StudyResults results = rsw::calibration::read_study_results(out / "shape.h5");
+  EXPECT_EQ(results.count(rsw::calibration::StudyResults::Status::ok), 20u);
+  const auto json = nlohmann::json::parse(read_file(out / "shape_runs.json"));
+  const std::string csv = read_file(out / "shape_runs.csv");
+  EXPECT_NE(csv.find(",failure_reason,undefined_features\n"), std::string::npos) << csv;
+  std::size_t n_undefined = 0;
+  for (std::size_t i = 0; i < results.n_points(); ++i) {
+    const auto& run = json["runs"][i];
+    EXPECT_EQ(run["status"], "ok");
+    const bool undefined = results.points(static_cast<Eigen::Index>(i), 0) > 0.5;
+    EXPECT_EQ(std::isnan(results.features(static_cast<Eigen::Index>(i), 0)), undefined) << "run " << i;
+    EXPECT_EQ(run["features"]["R_beta"].is_null(), undefined) << "run " << i;
+    EXPECT_EQ(run.contains("undefined_features"), undefined) << "run " << i;
+    if (!undefined) continue;
+    ++n_undefined;
+    EXPECT_EQ(run["undefined_features"]["R_beta"], "the dynamic resistance has no peak inside the trimmed weld stage");
+    EXPECT_TRUE(run["features"]["dS_P"].is_number());
+    // The CSV row: status ok, nan for R_beta, the name in the last column.
+    std::istringstream lines(csv);
+    std::string line;
+    for (std::size_t k = 0; k <= i + 1; ++k) std::getline(lines, line);
+    EXPECT_EQ(line.rfind(std::to_string(i) + ",ok,", 0), 0u) << line;
+    EXPECT_NE(line.find(",nan,"), std::string::npos) << line;
+    EXPECT_EQ(line.substr(line.size() - 7), ",R_beta") << line;
+  }
+  EXPECT_EQ(n_undefined, 10u);
+
+  // The sensitivity analysis fits R_beta on the runs where it is defined.
+  r = run_rsw("study sensitivity " + study.string() + " -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  const auto sensitivity = nlohmann::json::parse(read_file(out / "shape_sensitivity.json"));
+  EXPECT_EQ(sensitivity["features"][0]["n_runs"], 10);
+  EXPECT_EQ(sensitivity["features"][1]["n_runs"], 20);
   fs::remove_all(dir);
 }
 
