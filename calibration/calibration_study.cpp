@@ -198,6 +198,11 @@ void declare_calibration_keys(fem::ConfigSchema& s) {
       .doc("fixed: the noise standard deviation tau of the log-likelihood, in log-likelihood units.");
   s.integer("calibration.sbalc.seed").default_value("1").range(Range::closed(0, 1e9))
       .doc("Seed of the prior pool and the GP restarts; the same seed replays the same sequence of runs.");
+  s.choice("calibration.sbalc.failed_runs", {"impute_minimum", "exclude"}).default_value("impute_minimum")
+      .doc("What the GP does with a failed run: impute_minimum enters it at the lowest log-likelihood of the "
+           "successful runs so far (a region where the simulator fails, e.g. a melting electrode, is learnt as a "
+           "region of poor fit and stops being proposed); exclude leaves it out (the evidence then rests on the "
+           "successful runs only).");
   s.choice("calibration.sbalc.kernel", {"matern52", "squared_exponential"}).default_value("matern52")
       .doc("Anisotropic GP kernel.");
   s.choice("calibration.sbalc.trend", {"constant", "diagonal_quadratic", "full_quadratic"}).default_value("constant")
@@ -292,6 +297,8 @@ CalibrationSettings read_calibration_settings(const Study& study) {
     const double tau = c.number("calibration.sbalc.nugget_standard_deviation");
     sbalc.gp.fixed_noise_variance = tau * tau;
   }
+  sbalc.failed_runs = c.text("calibration.sbalc.failed_runs") == "exclude" ? FailedRunPolicy::exclude
+                                                                           : FailedRunPolicy::impute_minimum;
   sbalc.gp.kernel =
       c.text("calibration.sbalc.kernel") == "squared_exponential" ? KernelType::SquaredExponential : KernelType::Matern52;
   const std::string trend = c.text("calibration.sbalc.trend");

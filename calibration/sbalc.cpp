@@ -161,11 +161,20 @@ SbalcResult Sbalc::run() const {
                            std::to_string(result.n_evaluations) + ")";
       break;
     }
-    Eigen::MatrixXd x(n, d);
-    Eigen::VectorXd y(n);
+    // The GP's data: the successful evaluations, and with impute_minimum the failed
+    // ones at the lowest successful ℒ so far.
+    const bool impute = options_.failed_runs == FailedRunPolicy::impute_minimum;
+    const int n_imputed = impute ? static_cast<int>(result.failures.size()) : 0;
+    const double imputed_value = *std::min_element(values.begin(), values.end());
+    Eigen::MatrixXd x(n + n_imputed, d);
+    Eigen::VectorXd y(n + n_imputed);
     for (int i = 0; i < n; ++i) {
       x.row(i) = points[static_cast<std::size_t>(i)].transpose();
       y(i) = values[static_cast<std::size_t>(i)];
+    }
+    for (int i = 0; i < n_imputed; ++i) {
+      x.row(n + i) = result.failures[static_cast<std::size_t>(i)].theta.transpose();
+      y(n + i) = imputed_value;
     }
     GaussianProcessOptions gp_options = options_.gp;
     gp_options.seed = options_.seed * 0x9E3779B97F4A7C15ULL + static_cast<std::uint64_t>(iteration) + 1;
@@ -179,6 +188,8 @@ SbalcResult Sbalc::run() const {
 
     SbalcIteration record;
     record.n_points = n;
+    record.n_imputed = n_imputed;
+    record.imputed_value = n_imputed > 0 ? imputed_value : 0.0;
     record.n_evaluations = result.n_evaluations;
     record.log_evidence = evidence.log_evidence;
     record.log_evidence_upper = evidence.log_upper;
@@ -215,8 +226,8 @@ SbalcResult Sbalc::run() const {
     result.noise_standard_deviation = record.noise_standard_deviation;
     result.pool_mean = prediction.mean;
     result.pool_latent_sd = s;
-    result.design = x;
-    result.log_likelihoods = y;
+    result.design = x.topRows(n);
+    result.log_likelihoods = y.head(n);
     result.surrogate = gp;
 
     if (consecutive >= options_.n_consecutive) {
@@ -238,7 +249,7 @@ SbalcResult Sbalc::run() const {
     batch.clear();
     const int q = std::min(options_.batch_size, remaining);
     GaussianProcess believer = gp;
-    if (!result.failures.empty()) {
+    if (!impute && !result.failures.empty()) {
       const Eigen::Index n_failed = static_cast<Eigen::Index>(result.failures.size());
       Eigen::MatrixXd failed(n_failed, d);
       for (Eigen::Index i = 0; i < n_failed; ++i)

@@ -262,6 +262,50 @@ TEST(Sbalc, FailedEvaluationsAreRecordedAndNeverReproposed) {
   EXPECT_LT(std::abs(error), 0.1);
 }
 
+TEST(Sbalc, FailingRegionNextToThePosteriorIsLearntAsPoorFitWhenImputed) {
+  // The "simulator" fails for θ₁ > θ̂₁ + 1 sd: a failing region that cuts through the
+  // posterior (as a melting electrode cuts through the contact-parameter prior). With
+  // failed runs imputed at the lowest ℒ seen, the failing region leaves the evidence,
+  // which is then the integral of exp ℒ over the part of the box where the model runs
+  // (computed here by midpoint quadrature), and SBALC stops proposing it.
+  const LinearGaussianProblem problem = LinearGaussianProblem::make();
+  const double cut = problem.mode(0) + std::sqrt(problem.precision.inverse()(0, 0));
+  const auto f = [&](const Eigen::VectorXd& theta) -> std::optional<double> {
+    if (theta(0) > cut) return std::nullopt;
+    return problem.log_likelihood(theta);
+  };
+  double sum = 0.0;
+  const int n = 2000;
+  Eigen::Vector2d theta;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      theta << (i + 0.5) / n, (j + 0.5) / n;
+      if (theta(0) <= cut) sum += std::exp(problem.log_likelihood(theta));
+    }
+  const double reference = std::log(sum / (static_cast<double>(n) * n));
+
+  SbalcOptions options;
+  options.max_evaluations = 150;
+  const SbalcResult imputed = Sbalc(2, f, options).run();
+  print_history("imputed", imputed);
+  const double error = std::exp(imputed.log_evidence - reference) - 1.0;
+  options.failed_runs = FailedRunPolicy::exclude;
+  const SbalcResult excluded = Sbalc(2, f, options).run();
+  const double error_excluded = std::exp(excluded.log_evidence - reference) - 1.0;
+  std::printf("failing region through the posterior: imputed %zu failed of %d, evidence error %+.2f %%, %s; "
+              "excluded %zu failed of %d, evidence error %+.2f %%, %s\n",
+              imputed.failures.size(), imputed.n_evaluations, 100.0 * error, imputed.stop_reason.c_str(),
+              excluded.failures.size(), excluded.n_evaluations, 100.0 * error_excluded,
+              excluded.stop_reason.c_str());
+  EXPECT_TRUE(imputed.converged) << imputed.stop_reason;
+  EXPECT_LT(std::abs(error), 0.1);
+  // The cliff at the failure boundary takes many points to resolve (converged within
+  // the cap of 150), but few of them fail.
+  EXPECT_LT(7 * imputed.failures.size(), static_cast<std::size_t>(imputed.n_evaluations));
+  EXPECT_GT(imputed.history.back().n_imputed, 0);
+  EXPECT_EQ(imputed.design.rows() + static_cast<Eigen::Index>(imputed.failures.size()), imputed.n_evaluations);
+}
+
 TEST(Sbalc, PosteriorFromSbalcMatchesLinearGaussianMoments) {
   const LinearGaussianProblem problem = LinearGaussianProblem::make();
   const SbalcResult sbalc =
