@@ -70,6 +70,7 @@ struct Mechanics::Impl {
   double last_load_change = 0;     // ΔF or Δw of that step
   Control last_control = Control::force;
   double load_change = 0;          // ΔF or Δw of the current step
+  double predictor_scale = 0;      // set_predictor() for the next force step
   Eigen::VectorXd total;        // u since the start (full)
   Eigen::VectorXd temperature;  // nodal, °C
   Control control = Control::force;
@@ -690,6 +691,20 @@ MechanicsStepReport Mechanics::solve_force_step(double force, const Eigen::Vecto
   m.control = Control::force;
   m.force = force;
   m.predict(Control::force, force - force_);
+  if (m.predictor_scale > 0 && m.last_control == Control::force && m.last_increment.size() == m.increment.size()) {
+    // The alternative guess: the last increment scaled (at constant force the
+    // temperature, and with it the thermal strain, moves on smoothly from step to
+    // step); the one with the smaller residual starts Newton. The converged step does
+    // not depend on the choice.
+    fem::SparseMatrix unused;
+    Eigen::VectorXd R_rule, R_alternative;
+    m.evaluate(Control::force, unused, R_rule, false);
+    const Eigen::VectorXd rule = m.increment;
+    m.increment = m.last_increment * m.predictor_scale;
+    m.evaluate(Control::force, unused, R_alternative, false);
+    if (!(R_alternative.norm() < R_rule.norm())) m.increment = rule;
+  }
+  m.predictor_scale = 0;
   auto report = m.newton(Control::force, std::abs(force));
   force_ = force;
   return report;
@@ -707,6 +722,8 @@ MechanicsStepReport Mechanics::solve_displacement_step(double w, const Eigen::Ve
   force_ = m.end_face_force();
   return report;
 }
+
+void Mechanics::set_predictor(double scale) { impl_->predictor_scale = scale; }
 
 void Mechanics::commit() {
   Impl& m = *impl_;

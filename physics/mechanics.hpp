@@ -122,6 +122,11 @@ class Mechanics {
   MechanicsStepReport solve_force_step(double force, const Eigen::VectorXd& nodal_temperature);
   // Displacement control: the upper end face's total z displacement is `w` (m).
   MechanicsStepReport solve_displacement_step(double w, const Eigen::VectorXd& nodal_temperature);
+  // For the next force step only: the last committed increment times `scale` (e.g.
+  // the ratio of the time steps) is tried as the initial guess besides the load-change
+  // rule, and the one with the smaller residual starts Newton; the converged step does
+  // not depend on it (up to the tolerance). 0 (the default) tries the rule only.
+  void set_predictor(double scale);
   // Accepts the last converged step: history, geometry and totals move forward.
   void commit();
   // Points of sheet/sheet interfaces bonded by melting (flags per pairing point, in

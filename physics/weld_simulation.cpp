@@ -369,6 +369,7 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
     return {};
   };
   double nugget_energy_fraction = std::nan("");
+  double last_mechanics_step = 0;  // s, the last committed mechanics (sub-)step of the weld stage
   for (std::size_t k = 1; k < times.size(); ++k) {
     const double t = times[k], dt = times[k] - times[k - 1];
     const double I = problem.schedule.current.at(t);
@@ -494,10 +495,13 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
       const double F_start = problem.schedule.force.at(times[k - 1]), F_end = problem.schedule.force.at(t);
       MechanicsStepReport report;
       std::function<bool(double, double, int)> advance = [&](double s0, double s1, int depth) {
+        const double length = (s1 - s0) * dt;
+        if (last_mechanics_step > 0) mech.set_predictor(length / last_mechanics_step);
         report = mech.solve_force_step(F_start + s1 * (F_end - F_start), T_start + s1 * (T_iter - T_start));
         result.n_newton_iterations += report.iterations;
         if (report.converged) {
           mech.commit();
+          last_mechanics_step = length;
           return true;
         }
         if (depth == 5) return false;
