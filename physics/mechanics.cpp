@@ -679,11 +679,7 @@ Mechanics::Mechanics(const fem::Mesh& mesh, std::vector<const materials::Materia
     : impl_(std::make_unique<Impl>(mesh, std::move(body_materials), settings, initial_temperature)),
       positions_(mesh.nodes) {}
 
-Mechanics::~Mechanics() {
-  if (std::getenv("RSW_STATS"))  // EXPTMP
-    std::fprintf(stderr, "gmres: force %d factorizations %d iterations; displacement %d / %d\n", impl_->force_gmres.n_factorizations(),
-                 impl_->force_gmres.n_iterations(), impl_->displacement_gmres.n_factorizations(), impl_->displacement_gmres.n_iterations());
-}
+Mechanics::~Mechanics() = default;
 
 MechanicsStepReport Mechanics::solve_force_step(double force, const Eigen::VectorXd& nodal_temperature) {
   Impl& m = *impl_;

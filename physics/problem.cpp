@@ -238,9 +238,11 @@ ConfigSchema build_schema() {
       .range(Range::closed(0.1, 1e4))
       .doc("Normal contact penalty eps_N = factor * E / h (E of the stiffer side, h the finest "
            "interface cell).");
-  s.number("solver.contact_smoothing", "m", "nm").default_value("10 nm")
-      .range(Range::closed(0, 1e4))
-      .doc("Width of the quadratic start of the C1 penalty contact law.");
+  s.number("solver.contact_smoothing", "m", "um").default_value("1 um")
+      .range(Range::closed(0, 10))
+      .doc("Width of the quadratic start of the C1 penalty contact law: contact stiffens over this much "
+           "penetration, of the order of the surface roughness (cold-rolled sheet and dressed caps: Ra about "
+           "1 um). Narrower widths make Newton cycle where contact points open and close in the melt.");
   s.number("solver.coupling_tolerance", "degC", "degC").default_value("1e-2 degC")
       .range(Range::closed(1e-9, 10))
       .doc("Electro-thermal coupling iterations stop when no nodal temperature changes by "
