@@ -370,6 +370,7 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
   };
   double nugget_energy_fraction = std::nan("");
   double last_mechanics_step = 0;  // s, the last committed mechanics (sub-)step of the weld stage
+  double resistance_peak = 0;      // Ω, over every weld step with current (not only output steps)
   for (std::size_t k = 1; k < times.size(); ++k) {
     const double t = times[k], dt = times[k] - times[k - 1];
     const double I = problem.schedule.current.at(t);
@@ -443,6 +444,7 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
     last_current = I;
     if (I != 0.0) {
       const auto& sol = electrical.solution();
+      resistance_peak = std::max(resistance_peak, sol.resistance);
       last_voltage = sol.voltage;
       electrical_energy += sol.voltage * I * dt;
       last_bulk_power = sol.bulk_power;
@@ -624,11 +626,7 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
     j["mechanics_substep_splits"] = result.n_mechanics_substepped;
     for (const auto& [name, value] : result.nugget) j["nugget"][name] = value;
     for (const auto& [name, value] : result.energy) j["energy_J"][name] = value;
-    const int r_col = sig.column("resistance");
-    double r_peak = 0;
-    for (double r : sig.columns[r_col])
-      if (!std::isnan(r)) r_peak = std::max(r_peak, r);
-    j["dynamic_resistance_peak_ohm"] = r_peak;
+    j["dynamic_resistance_peak_ohm"] = resistance_peak;  // over all weld steps
     j["squeeze"]["electrode_displacement_m"] = result.squeeze_displacement;
     j["squeeze"]["indentation_m"] = result.squeeze_indentation;
     for (const auto& [name, r] : result.squeeze_contact_radius) j["squeeze"]["contact_radius_m"][name] = r;
