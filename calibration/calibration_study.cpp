@@ -203,6 +203,10 @@ void declare_calibration_keys(fem::ConfigSchema& s) {
            "successful runs so far (a region where the simulator fails, e.g. a melting electrode, is learnt as a "
            "region of poor fit and stops being proposed); exclude leaves it out (the evidence then rests on the "
            "successful runs only).");
+  s.choice("calibration.sbalc.pool", {"adaptive", "prior"}).default_value("adaptive")
+      .doc("prior: the paper's pool of prior samples throughout; adaptive: redrawn from a defensive mixture "
+           "around the current posterior (importance-weighted) whenever its effective sample size falls below 2 % "
+           "of the pool, so that a posterior much narrower than the prior is resolved.");
   s.choice("calibration.sbalc.kernel", {"matern52", "squared_exponential"}).default_value("matern52")
       .doc("Anisotropic GP kernel.");
   s.choice("calibration.sbalc.trend", {"constant", "diagonal_quadratic", "full_quadratic"}).default_value("constant")
@@ -299,6 +303,7 @@ CalibrationSettings read_calibration_settings(const Study& study) {
   }
   sbalc.failed_runs = c.text("calibration.sbalc.failed_runs") == "exclude" ? FailedRunPolicy::exclude
                                                                            : FailedRunPolicy::impute_minimum;
+  sbalc.adaptive_pool = c.text("calibration.sbalc.pool") == "adaptive";
   sbalc.gp.kernel =
       c.text("calibration.sbalc.kernel") == "squared_exponential" ? KernelType::SquaredExponential : KernelType::Matern52;
   const std::string trend = c.text("calibration.sbalc.trend");

@@ -50,6 +50,7 @@ SirPosterior::SirPosterior(Eigen::MatrixXd pool, Eigen::VectorXd log_likelihoods
 
 SirPosterior::SirPosterior(const SbalcResult& sbalc, PosteriorOptions options)
     : SirPosterior(sbalc.pool, sbalc.pool_mean, options) {
+  if (sbalc.pool_log_weight.size() == pool_.rows()) log_pool_weights_ = sbalc.pool_log_weight;
   if (sbalc.surrogate) {
     const GaussianProcess gp = *sbalc.surrogate;
     log_density_ = [gp](const Eigen::VectorXd& theta) { return gp.predict(theta).mean(0); };
@@ -61,8 +62,11 @@ PosteriorResult SirPosterior::run() const {
   const Eigen::Index d = pool_.cols();
   PosteriorResult result;
 
-  const double log_total = log_sum_exp(log_likelihoods_);
-  result.weights = (log_likelihoods_.array() - log_total).exp().matrix();
+  // Importance weights: likelihood times the pool's prior/proposal ratio.
+  const Eigen::VectorXd log_weights =
+      log_pool_weights_.size() == n ? Eigen::VectorXd(log_likelihoods_ + log_pool_weights_) : log_likelihoods_;
+  const double log_total = log_sum_exp(log_weights);
+  result.weights = (log_weights.array() - log_total).exp().matrix();
   result.weights /= result.weights.sum();
   result.effective_sample_size = 1.0 / result.weights.squaredNorm();
   result.ess_threshold = std::max(options_.ess_min_absolute, options_.ess_min_fraction * static_cast<double>(n));

@@ -73,7 +73,8 @@ class SirPosterior {
   // log_density (optional): ℓ(θ) for refining the MAP; maximised over [0,1]^d.
   SirPosterior(Eigen::MatrixXd pool, Eigen::VectorXd log_likelihoods, PosteriorOptions options = {},
                std::function<double(const Eigen::VectorXd&)> log_density = {});
-  // The SBALC pool with ℓ = GP latent mean; the MAP is refined on the GP mean.
+  // The SBALC pool with ℓ = GP latent mean (weights times the pool's prior/proposal
+  // ratio if the pool is adaptive, sbalc.hpp); the MAP is refined on the GP mean.
   explicit SirPosterior(const SbalcResult& sbalc, PosteriorOptions options = {});
 
   PosteriorResult run() const;
@@ -81,6 +82,7 @@ class SirPosterior {
  private:
   Eigen::MatrixXd pool_;
   Eigen::VectorXd log_likelihoods_;
+  Eigen::VectorXd log_pool_weights_;  // ln(prior/proposal) of an adaptive SBALC pool; empty: prior pool
   PosteriorOptions options_;
   std::function<double(const Eigen::VectorXd&)> log_density_;
 };

@@ -3,6 +3,8 @@
 
 #include "calibration/designs.hpp"
 
+#include <Eigen/Dense>
+
 #include <algorithm>
 #include <cmath>
 #include <exception>
@@ -27,6 +29,64 @@ Eigen::MatrixXd prior_pool(int n, int d, std::uint64_t seed) {
   return pool;
 }
 
+// Kish effective sample size of the weights ∝ exp(v).
+double effective_sample_size(const Eigen::VectorXd& v) {
+  const double total = log_sum_exp(v);
+  if (!std::isfinite(total)) return 0.0;
+  const Eigen::ArrayXd w = (v.array() - total).exp();
+  return 1.0 / w.square().sum();
+}
+
+// The adaptive pool (sbalc.hpp): n points from q = α U[0,1]^d + (1 − α) N(μ, Σ)|box,
+// with ln r = −ln q at each. μ, Σ from the old pool's weights ∝ exp(log_w).
+void redraw_pool(const Eigen::MatrixXd& old_pool, const Eigen::VectorXd& log_w, double alpha, std::uint64_t seed,
+                 Eigen::MatrixXd& pool, Eigen::VectorXd& log_r) {
+  const Eigen::Index n = old_pool.rows(), d = old_pool.cols();
+  const Eigen::VectorXd w = (log_w.array() - log_sum_exp(log_w)).exp().matrix();
+  const Eigen::VectorXd mu = old_pool.transpose() * w;
+  const Eigen::MatrixXd centred = old_pool.rowwise() - mu.transpose();
+  Eigen::MatrixXd sigma = centred.transpose() * w.asDiagonal() * centred;
+  const double spacing = std::pow(static_cast<double>(n), -1.0 / static_cast<double>(d));
+  sigma = 4.0 * sigma + spacing * spacing * Eigen::MatrixXd::Identity(d, d);
+  const Eigen::LLT<Eigen::MatrixXd> llt(sigma);
+  const Eigen::MatrixXd L = llt.matrixL();
+  const double log_det_l = L.diagonal().array().log().sum();
+  std::mt19937_64 generator(seed);
+  std::normal_distribution<double> normal;
+  pool.resize(n, d);
+  long gaussian_draws = 0, gaussian_inside = 0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (uniform01(generator) < alpha) {
+      for (Eigen::Index j = 0; j < d; ++j) pool(i, j) = uniform01(generator);
+      continue;
+    }
+    for (int attempt = 0;; ++attempt) {
+      Eigen::VectorXd z(d);
+      for (Eigen::Index j = 0; j < d; ++j) z(j) = normal(generator);
+      const Eigen::VectorXd theta = mu + L * z;
+      ++gaussian_draws;
+      if ((theta.array() >= 0.0).all() && (theta.array() <= 1.0).all()) {
+        ++gaussian_inside;
+        pool.row(i) = theta.transpose();
+        break;
+      }
+      if (attempt == 10000) {  // the Gaussian lies outside the box: a prior point instead
+        for (Eigen::Index j = 0; j < d; ++j) pool(i, j) = uniform01(generator);
+        break;
+      }
+    }
+  }
+  const double z_box = gaussian_draws > 0 ? std::max(static_cast<double>(gaussian_inside) / gaussian_draws, 1e-300) : 1.0;
+  log_r.resize(n);
+  const double log_norm = 0.5 * static_cast<double>(d) * std::log(2.0 * M_PI) + log_det_l + std::log(z_box);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Eigen::VectorXd z = L.triangularView<Eigen::Lower>().solve(pool.row(i).transpose() - mu);
+    const double log_phi = -0.5 * z.squaredNorm() - log_norm;  // density of N(μ, Σ)/Z on the box
+    const double q = alpha + (1.0 - alpha) * std::exp(log_phi);
+    log_r(i) = -std::log(q);
+  }
+}
+
 // ln LF = 2 ln s + m + b s + ln(1 − e^{−2bs}); −∞ where s = 0.
 double log_learning_function(double m, double s, double b) {
   if (!(s > 0.0)) return kMinusInfinity;
@@ -37,12 +97,14 @@ struct EvidenceEstimate {
   double log_evidence, log_upper, log_lower, ratio;
 };
 
-EvidenceEstimate estimate_evidence(const Eigen::VectorXd& m, const Eigen::VectorXd& s, double b) {
+// Pool averages with importance ratios r_i (ln r = log_r; all 0 for the prior pool).
+EvidenceEstimate estimate_evidence(const Eigen::VectorXd& m, const Eigen::VectorXd& s, double b,
+                                   const Eigen::VectorXd& log_r) {
   const double log_n = std::log(static_cast<double>(m.size()));
   EvidenceEstimate e;
-  e.log_evidence = log_sum_exp(m) - log_n;
-  e.log_upper = log_sum_exp(m + b * s) - log_n;
-  e.log_lower = log_sum_exp(m - b * s) - log_n;
+  e.log_evidence = log_sum_exp(m + log_r) - log_n;
+  e.log_upper = log_sum_exp(m + b * s + log_r) - log_n;
+  e.log_lower = log_sum_exp(m - b * s + log_r) - log_n;
   e.ratio = std::exp(e.log_upper - e.log_evidence) - std::exp(e.log_lower - e.log_evidence);
   return e;
 }
@@ -50,12 +112,13 @@ EvidenceEstimate estimate_evidence(const Eigen::VectorXd& m, const Eigen::Vector
 // Index of the largest ln LF over unused pool points, or −1 if none is finite. Ties
 // go to the lowest index, so the choice is deterministic.
 Eigen::Index best_candidate(const GaussianProcessPrediction& prediction, const std::vector<char>& used, double b,
-                            double& log_lf) {
+                            const Eigen::VectorXd& log_r, double& log_lf) {
   Eigen::Index best = -1;
   log_lf = kMinusInfinity;
   for (Eigen::Index i = 0; i < prediction.mean.size(); ++i) {
     if (used[static_cast<std::size_t>(i)]) continue;
-    const double value = log_learning_function(prediction.mean(i), std::sqrt(prediction.latent_variance(i)), b);
+    const double value =
+        log_learning_function(prediction.mean(i), std::sqrt(prediction.latent_variance(i)), b) + log_r(i);
     if (value > log_lf) {
       log_lf = value;
       best = i;
@@ -110,6 +173,7 @@ SbalcResult Sbalc::run() const {
   const double b = options_.bound_width;
   SbalcResult result;
   result.pool = prior_pool(options_.pool_size, d, options_.seed);
+  result.pool_log_weight = Eigen::VectorXd::Zero(options_.pool_size);
   std::vector<char> used(static_cast<std::size_t>(options_.pool_size), 0);
 
   std::vector<Eigen::VectorXd> points;
@@ -183,12 +247,28 @@ SbalcResult Sbalc::run() const {
     GaussianProcess gp = regression.run();
     previous = gp.hyperparameters();
     GaussianProcessPrediction prediction = gp.predict(result.pool);
+    double pool_ess = effective_sample_size(prediction.mean + result.pool_log_weight);
+    bool pool_redrawn = false;
+    if (options_.adaptive_pool && pool_ess < options_.adaptive_pool_ess_fraction * options_.pool_size) {
+      Eigen::MatrixXd pool;
+      Eigen::VectorXd log_r;
+      redraw_pool(result.pool, prediction.mean + result.pool_log_weight, options_.adaptive_pool_prior_fraction,
+                  options_.seed * 0xD1B54A32D192ED03ULL + static_cast<std::uint64_t>(iteration) + 7, pool, log_r);
+      result.pool = std::move(pool);
+      result.pool_log_weight = std::move(log_r);
+      std::fill(used.begin(), used.end(), 0);
+      prediction = gp.predict(result.pool);
+      pool_ess = effective_sample_size(prediction.mean + result.pool_log_weight);
+      pool_redrawn = true;
+    }
     const Eigen::VectorXd s = prediction.latent_variance.cwiseSqrt();
-    const EvidenceEstimate evidence = estimate_evidence(prediction.mean, s, b);
+    const EvidenceEstimate evidence = estimate_evidence(prediction.mean, s, b, result.pool_log_weight);
 
     SbalcIteration record;
     record.n_points = n;
     record.n_imputed = n_imputed;
+    record.pool_ess = pool_ess;
+    record.pool_redrawn = pool_redrawn;
     record.imputed_value = n_imputed > 0 ? imputed_value : 0.0;
     record.n_evaluations = result.n_evaluations;
     record.log_evidence = evidence.log_evidence;
@@ -209,7 +289,7 @@ SbalcResult Sbalc::run() const {
         const GaussianProcess noise_free(x, y, interpolating, gp.hyperparameters());
         const Eigen::VectorXd s_noise =
             (prediction.latent_variance - noise_free.predict(result.pool).latent_variance).cwiseMax(0.0).cwiseSqrt();
-        record.noise_ratio = estimate_evidence(prediction.mean, s_noise, b).ratio;
+        record.noise_ratio = estimate_evidence(prediction.mean, s_noise, b, result.pool_log_weight).ratio;
         record.tolerance_used = std::hypot(options_.tolerance, record.noise_ratio);
       } catch (const std::runtime_error&) {
         // Clustered points can make the noise-free matrix unfactorisable within the
@@ -265,7 +345,7 @@ SbalcResult Sbalc::run() const {
     }
     for (int k = 0; k < q; ++k) {
       double log_lf = kMinusInfinity;
-      const Eigen::Index index = best_candidate(prediction, used, b, log_lf);
+      const Eigen::Index index = best_candidate(prediction, used, b, result.pool_log_weight, log_lf);
       if (index < 0) break;
       if (k == 0) record.log_learning_function = log_lf;
       used[static_cast<std::size_t>(index)] = 1;

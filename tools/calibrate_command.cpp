@@ -299,7 +299,7 @@ void write_posterior_csv(const fs::path& path, const cal::CalibrationResult& res
 const std::vector<std::string> diagnostics_columns = {
     "iteration", "n_points", "n_evaluations", "log_evidence", "log_evidence_lower", "log_evidence_upper", "ratio",
     "noise_ratio", "tolerance_used", "noise_standard_deviation", "signal_variance", "jitter",
-    "log_learning_function", "n_chosen", "n_imputed"};
+    "log_learning_function", "n_chosen", "n_imputed", "pool_ess"};
 
 Eigen::MatrixXd diagnostics_table(const cal::CalibrationResult& result) {
   const auto d = static_cast<Eigen::Index>(result.parameter_names.size());
@@ -312,7 +312,7 @@ Eigen::MatrixXd diagnostics_table(const cal::CalibrationResult& result) {
         it.n_points, it.n_evaluations, it.log_evidence, it.log_evidence_lower, it.log_evidence_upper, it.ratio,
         it.noise_ratio, it.tolerance_used, it.noise_standard_deviation, it.hyperparameters.signal_variance, it.jitter,
         it.chosen_points.rows() > 0 ? it.log_learning_function : std::numeric_limits<double>::quiet_NaN(),
-        static_cast<double>(it.chosen_points.rows()), static_cast<double>(it.n_imputed);
+        static_cast<double>(it.chosen_points.rows()), static_cast<double>(it.n_imputed), it.pool_ess;
     for (Eigen::Index j = 0; j < d; ++j) {
       table(r, static_cast<Eigen::Index>(diagnostics_columns.size()) + j) =
           j < it.hyperparameters.length_scales.size() ? it.hyperparameters.length_scales[j]

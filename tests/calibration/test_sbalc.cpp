@@ -306,6 +306,42 @@ TEST(Sbalc, FailingRegionNextToThePosteriorIsLearntAsPoorFitWhenImputed) {
   EXPECT_EQ(imputed.design.rows() + static_cast<Eigen::Index>(imputed.failures.size()), imputed.n_evaluations);
 }
 
+TEST(Sbalc, AdaptivePoolResolvesAPosteriorMuchNarrowerThanThePriorPool) {
+  // ℒ(θ) = −½ Σ_j ((θ_j − μ_j)/σ_j)² with σ = (0.002, 0.004): c = 2π σ₁σ₂ (the box holds
+  // the whole Gaussian). A prior pool of 20 000 points has about 20 000 · (4σ₁)(4σ₂) ≈ 2.6
+  // points inside ±2σ, too few to estimate c or the posterior; the adaptive pool zooms in.
+  const Eigen::Vector2d mu(0.37, 0.61), sigma(0.002, 0.004);
+  const auto f = [&](const Eigen::VectorXd& theta) -> std::optional<double> {
+    return -0.5 * ((theta - mu).array() / sigma.array()).square().sum();
+  };
+  const double reference = std::log(2.0 * M_PI * sigma(0) * sigma(1));
+  SbalcOptions options;
+  options.max_evaluations = 80;
+  options.gp.trend = TrendType::FullQuadratic;
+  const SbalcResult prior = Sbalc(2, f, options).run();
+  options.adaptive_pool = true;
+  const SbalcResult adaptive = Sbalc(2, f, options).run();
+  PosteriorOptions posterior_options;
+  posterior_options.credible_level = 0.9;
+  const PosteriorResult posterior = SirPosterior(adaptive, posterior_options).run();
+  const PosteriorResult posterior_prior = SirPosterior(prior, posterior_options).run();
+  const double error = std::exp(adaptive.log_evidence - reference) - 1.0;
+  std::printf("narrow posterior: adaptive pool %d runs, %s, evidence error %+.2f %%, ESS %.0f, mean (%.5f, %.5f), "
+              "sd (%.5f, %.5f); prior pool: %s, evidence error %+.2f %%, ESS %.1f\n",
+              adaptive.n_evaluations, adaptive.stop_reason.c_str(), 100.0 * error, posterior.effective_sample_size,
+              posterior.mean(0), posterior.mean(1), posterior.standard_deviation(0), posterior.standard_deviation(1),
+              prior.stop_reason.c_str(), 100.0 * (std::exp(prior.log_evidence - reference) - 1.0),
+              posterior_prior.effective_sample_size);
+  EXPECT_TRUE(adaptive.converged) << adaptive.stop_reason;
+  EXPECT_LT(std::abs(error), 0.1);
+  EXPECT_GT(posterior.effective_sample_size, 1000.0);
+  EXPECT_LT(posterior_prior.effective_sample_size, 20.0);
+  for (int j = 0; j < 2; ++j) {
+    EXPECT_NEAR(posterior.mean(j), mu(j), 0.2 * sigma(j));
+    EXPECT_NEAR(posterior.standard_deviation(j), sigma(j), 0.15 * sigma(j));
+  }
+}
+
 TEST(Sbalc, PosteriorFromSbalcMatchesLinearGaussianMoments) {
   const LinearGaussianProblem problem = LinearGaussianProblem::make();
   const SbalcResult sbalc =

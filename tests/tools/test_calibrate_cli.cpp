@@ -149,7 +149,7 @@ TEST(CalibrateCli, WritesEveryFileAndResumesIdentically) {
   const std::string diagnostics = read_file(out / "smooth_diagnostics.csv");
   EXPECT_EQ(diagnostics.rfind("iteration,n_points,n_evaluations,log_evidence,log_evidence_lower,log_evidence_upper,"
                               "ratio,noise_ratio,tolerance_used,noise_standard_deviation,signal_variance,jitter,"
-                              "log_learning_function,n_chosen,n_imputed,length_scale:a,length_scale:b\n0,5,5,",
+                              "log_learning_function,n_chosen,n_imputed,pool_ess,length_scale:a,length_scale:b\n0,5,5,",
                               0),
             0u)
       << diagnostics.substr(0, 300);
@@ -211,7 +211,9 @@ TEST(CalibrateCli, TerminatedCalibrationResumesWithoutRepeatingRuns) {
   } else if (!finished) {
     EXPECT_EQ(WTERMSIG(status), SIGTERM);
   }
-  if (!finished) EXPECT_FALSE(fs::exists(stopped / "slow_posterior.csv"));
+  if (!finished) {
+    EXPECT_FALSE(fs::exists(stopped / "slow_posterior.csv"));
+  }
 
   CommandResult r = run_rsw("calibrate " + study.string() + " -q --workers 2 --resume -o " + stopped.string());
   ASSERT_EQ(r.status, 0) << r.output;
