@@ -203,6 +203,10 @@ void declare_calibration_keys(fem::ConfigSchema& s) {
            "successful runs so far (a region where the simulator fails, e.g. a melting electrode, is learnt as a "
            "region of poor fit and stops being proposed); exclude leaves it out (the evidence then rests on the "
            "successful runs only).");
+  s.number("calibration.sbalc.log_likelihood_range", "1", "1").default_value("50").range(Range::closed(0, 1e6))
+      .doc("The GP of the log-likelihood sees max(lnL, lnL_max - range): only the top of the log-likelihood "
+           "matters for the evidence, and a GP asked to fit thousands of units of range chases the cliffs. 0: "
+           "no floor (the paper's).");
   s.choice("calibration.sbalc.pool", {"adaptive", "prior"}).default_value("adaptive")
       .doc("prior: the paper's pool of prior samples throughout; adaptive: redrawn from a defensive mixture "
            "around the current posterior (importance-weighted) whenever its effective sample size falls below 2 % "
@@ -304,6 +308,7 @@ CalibrationSettings read_calibration_settings(const Study& study) {
   sbalc.failed_runs = c.text("calibration.sbalc.failed_runs") == "exclude" ? FailedRunPolicy::exclude
                                                                            : FailedRunPolicy::impute_minimum;
   sbalc.adaptive_pool = c.text("calibration.sbalc.pool") == "adaptive";
+  sbalc.log_likelihood_range = c.number("calibration.sbalc.log_likelihood_range");
   sbalc.gp.kernel =
       c.text("calibration.sbalc.kernel") == "squared_exponential" ? KernelType::SquaredExponential : KernelType::Matern52;
   const std::string trend = c.text("calibration.sbalc.trend");

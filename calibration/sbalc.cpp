@@ -229,13 +229,18 @@ SbalcResult Sbalc::run() const {
     // ones at the lowest successful ℒ so far.
     const bool impute = options_.failed_runs == FailedRunPolicy::impute_minimum;
     const int n_imputed = impute ? static_cast<int>(result.failures.size()) : 0;
-    const double imputed_value = *std::min_element(values.begin(), values.end());
+    // The floor ℒ_max − Δ (sbalc.hpp) bounds what the GP must fit.
+    const double floor = options_.log_likelihood_range > 0.0
+                             ? *std::max_element(values.begin(), values.end()) - options_.log_likelihood_range
+                             : kMinusInfinity;
+    const double imputed_value = std::max(*std::min_element(values.begin(), values.end()), floor);
     Eigen::MatrixXd x(n + n_imputed, d);
     Eigen::VectorXd y(n + n_imputed);
     for (int i = 0; i < n; ++i) {
       x.row(i) = points[static_cast<std::size_t>(i)].transpose();
-      y(i) = values[static_cast<std::size_t>(i)];
+      y(i) = std::max(values[static_cast<std::size_t>(i)], floor);
     }
+    Eigen::VectorXd y_raw(n);  // the evaluated ℒ, unfloored (reported)
     for (int i = 0; i < n_imputed; ++i) {
       x.row(n + i) = result.failures[static_cast<std::size_t>(i)].theta.transpose();
       y(n + i) = imputed_value;
@@ -307,7 +312,8 @@ SbalcResult Sbalc::run() const {
     result.pool_mean = prediction.mean;
     result.pool_latent_sd = s;
     result.design = x.topRows(n);
-    result.log_likelihoods = y.head(n);
+    for (int i = 0; i < n; ++i) y_raw(i) = values[static_cast<std::size_t>(i)];
+    result.log_likelihoods = y_raw;
     result.surrogate = gp;
 
     if (consecutive >= options_.n_consecutive) {

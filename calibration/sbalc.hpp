@@ -85,6 +85,15 @@
 // gains ln r_i (a point's share of the evidence uncertainty). The pool zooms in over
 // the iterations as the GP learns the posterior. Off, the pool is the paper's.
 //
+// Log-likelihood floor (option log_likelihood_range = Δ, our extension, after the lower
+// threshold of Acerbi's VBMC, 2018): the GP sees max(ℒ_i, ℒ_max − Δ), ℒ_max the largest
+// evaluated ℒ. A log-likelihood from several replicates spans thousands of units over
+// the prior but only the top few tens matter for the evidence (a region below
+// ℒ_max − Δ contributes at most e^{−Δ} of the prior mass times e^{ℒ_max}, against
+// e^{ℒ_max} times the posterior's share of the prior); a stationary GP asked to fit the
+// whole range chases the cliffs and estimates a large noise. Δ = 50 by default; 0
+// disables the floor.
+//
 // Deterministic for a fixed seed: pool, GP restarts and tie breaks derive from it.
 #pragma once
 
@@ -122,6 +131,7 @@ struct SbalcOptions {
   int batch_size = 1;             // q points per iteration (kriging believer)
   bool noise_aware_tolerance = true;  // tolerance_used = √(tolerance² + ratio_τ²) (with a nugget)
   FailedRunPolicy failed_runs = FailedRunPolicy::impute_minimum;
+  double log_likelihood_range = 50.0;         // Δ of the log-likelihood floor (0: none)
   bool adaptive_pool = false;                 // see "Adaptive pool" above
   double adaptive_pool_ess_fraction = 0.02;   // redraw when ESS < this · pool_size
   double adaptive_pool_prior_fraction = 0.1;  // α, the prior share of the proposal
@@ -134,7 +144,7 @@ struct SbalcIteration {
   int n_imputed = 0;       // failed evaluations in the GP at the imputed value (impute_minimum)
   double pool_ess = 0.0;   // effective sample size of the pool's posterior weights (after any redraw)
   bool pool_redrawn = false;  // the adaptive pool was redrawn in this iteration
-  double imputed_value = 0.0;  // that value: the lowest successful ℒ so far
+  double imputed_value = 0.0;  // that value: the lowest successful ℒ so far (not below the floor)
   int n_evaluations = 0;   // all evaluations so far
   double log_evidence = 0.0;        // ln ĉ
   double log_evidence_upper = 0.0;  // ln c_upper
