@@ -240,7 +240,6 @@ SbalcResult Sbalc::run() const {
       x.row(i) = points[static_cast<std::size_t>(i)].transpose();
       y(i) = std::max(values[static_cast<std::size_t>(i)], floor);
     }
-    Eigen::VectorXd y_raw(n);  // the evaluated ℒ, unfloored (reported)
     for (int i = 0; i < n_imputed; ++i) {
       x.row(n + i) = result.failures[static_cast<std::size_t>(i)].theta.transpose();
       y(n + i) = imputed_value;
@@ -312,8 +311,7 @@ SbalcResult Sbalc::run() const {
     result.pool_mean = prediction.mean;
     result.pool_latent_sd = s;
     result.design = x.topRows(n);
-    for (int i = 0; i < n; ++i) y_raw(i) = values[static_cast<std::size_t>(i)];
-    result.log_likelihoods = y_raw;
+    result.log_likelihoods = Eigen::Map<const Eigen::VectorXd>(values.data(), n);  // unfloored
     result.surrogate = gp;
 
     if (consecutive >= options_.n_consecutive) {

@@ -424,9 +424,11 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
       fp.max_iterations = problem.solver.max_coupling_iterations;
       const fem::FixedPointReport coupling = fem::solve_fixed_point(coupled_step, T_iter, fp);
       it = coupling.iterations;
-      if (!coupling.converged && !electrode_melting(thermal.temperature()).empty())
-        return fail("weld stage, step " + std::to_string(k) + " (t = " + std::to_string(t * 1e3) + " ms): " +
-                    electrode_melting(thermal.temperature()));
+      if (!coupling.converged) {
+        if (const std::string melting = electrode_melting(thermal.temperature()); !melting.empty())
+          return fail("weld stage, step " + std::to_string(k) + " (t = " + std::to_string(t * 1e3) + " ms): " +
+                      melting);
+      }
       if (!coupling.converged)
         return fail("weld stage, step " + std::to_string(k) + " (t = " + std::to_string(t * 1e3) + " ms), " +
                     (coupling_failure.empty()
