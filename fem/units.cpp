@@ -175,6 +175,7 @@ std::string kind_locked(const std::string& normalised_unit) {
       {"A/m^2", "current density"},
       {"N", "force"},
       {"Pa", "pressure"},
+      {"Pa*s", "dynamic viscosity"},
       {"K", "temperature"},
       {"1/K", "thermal expansion coefficient"},
       {"kg", "mass"},

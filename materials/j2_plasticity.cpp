@@ -98,6 +98,13 @@ J2Result j2_update(const Material& material, const J2State& committed, const J2I
   const double trial_q = sqrt_three_halves * trial_norm;
   const double eps_bar_n = committed.equivalent_plastic_strain;
   const FlowStress initial = material.yield_stress(eps_bar_n, temperature);
+  // Viscous overstress modulus H_v = eta/dt and its temperature slope.
+  double viscous = 0, viscous_slope = 0;
+  if (input.time_step > 0) {
+    const PropertyValue eta = material.flow_viscosity(temperature);
+    viscous = eta.value / input.time_step;
+    viscous_slope = eta.slope / input.time_step;
+  }
 
   // Mean-stress part of the temperature derivative, shared by both branches.
   const double pressure_slope =
@@ -115,10 +122,10 @@ J2Result j2_update(const Material& material, const J2State& committed, const J2I
     return result;
   }
 
-  // Plastic: solve r(dgamma) = q_trial - 3 G dgamma - sigma_y(eps_bar_n + dgamma) = 0.
+  // Plastic: solve r(dgamma) = q_trial - 3 G dgamma - sigma_y(eps_bar_n + dgamma) - H_v dgamma = 0.
   double lower = 0;
   double upper = trial_q / (3 * shear);
-  double dgamma = std::clamp((trial_q - initial.yield_stress) / (3 * shear + initial.hardening),
+  double dgamma = std::clamp((trial_q - initial.yield_stress) / (3 * shear + initial.hardening + viscous),
                              lower, upper);
   FlowStress flow;
   bool converged = false;
@@ -126,7 +133,7 @@ J2Result j2_update(const Material& material, const J2State& committed, const J2I
   while (iteration < max_return_iterations) {
     ++iteration;
     flow = material.yield_stress(eps_bar_n + dgamma, temperature);
-    const double residual = trial_q - 3 * shear * dgamma - flow.yield_stress;
+    const double residual = trial_q - 3 * shear * dgamma - flow.yield_stress - viscous * dgamma;
     if (std::abs(residual) <= return_tolerance * trial_q) {
       converged = true;
       break;
@@ -136,7 +143,7 @@ J2Result j2_update(const Material& material, const J2State& committed, const J2I
     } else {
       upper = dgamma;
     }
-    double next = dgamma + residual / (3 * shear + flow.hardening);
+    double next = dgamma + residual / (3 * shear + flow.hardening + viscous);
     if (!(next > lower && next < upper)) next = 0.5 * (lower + upper);
     if (upper - lower <= 1e-15 * upper) {
       // Bracket collapsed (a kink of the flow curve): the root is pinned.
@@ -155,7 +162,7 @@ J2Result j2_update(const Material& material, const J2State& committed, const J2I
 
   const MandelVector normal = trial_deviator / trial_norm;
   const double q = trial_q - 3 * shear * dgamma;
-  const double hardening = flow.hardening;
+  const double hardening = flow.hardening + viscous;  // H + H_v
 
   result.yielded = true;
   result.plastic_increment = dgamma;
@@ -174,9 +181,10 @@ J2Result j2_update(const Material& material, const J2State& committed, const J2I
 
   const double trial_q_slope = trial_q * moduli.shear_slope / shear;
   const double dgamma_slope =
-      (trial_q_slope - 3 * moduli.shear_slope * dgamma - flow.temperature_slope) /
+      (trial_q_slope - 3 * moduli.shear_slope * dgamma - flow.temperature_slope -
+       viscous_slope * dgamma) /
       (3 * shear + hardening);
-  const double q_slope = flow.temperature_slope + hardening * dgamma_slope;
+  const double q_slope = flow.temperature_slope + viscous_slope * dgamma + hardening * dgamma_slope;
   result.stress_temperature_derivative =
       pressure_slope * one + sqrt_two_thirds * q_slope * normal;
   return result;

@@ -1,6 +1,7 @@
-// Small-strain J2 (von Mises) plasticity with isotropic hardening for axisymmetric
-// stress states, integrated by the radial-return mapping (backward Euler), with the
-// consistent tangent and the temperature derivative of the stress.
+// Small-strain J2 (von Mises) plasticity with isotropic hardening and an optional
+// viscous overstress for axisymmetric stress states, integrated by the radial-return
+// mapping (backward Euler), with the consistent tangent and the temperature
+// derivative of the stress.
 //
 // Components in Mandel notation, ordered [rr, zz, theta-theta, sqrt(2) rz]:
 //     strain  e = [eps_rr, eps_zz, eps_tt, sqrt(2) eps_rz],  eps_rz = gamma_rz / 2,
@@ -14,6 +15,15 @@
 //     K = E / (3 (1 - 2 nu)),  G = E / (2 (1 + nu)),
 //     f = q - sigma_y(eps_bar_p, T) <= 0,  q = sqrt(3/2) |dev(sigma)|,
 //     eps_p' = dgamma sqrt(3/2) n,  eps_bar_p' = dgamma,  n = dev(sigma) / |dev(sigma)|.
+// Rate dependence (Perzyna 1966 with exponent 1, a linear overstress): while f > 0 the
+// plastic strain grows at eps_bar_p' = f / eta(T), i.e. q = sigma_y + eta eps_bar_p',
+// eta the material's flow_viscosity (Pa*s). Over a step of length dt (backward Euler)
+// the overstress is (eta/dt) dgamma, so eta/dt = H_v acts as an extra hardening modulus
+// that is not remembered: the next step starts from sigma_y again, and a held strain
+// relaxes, q - sigma_y falling by the factor 1/(1 + 3 G dt/eta) per step (exactly
+// exp(-3 G t/eta) as dt -> 0 for perfect plasticity). dt = 0 (or eta = 0) is the
+// rate-independent limit. (Simo & Hughes 1998, 2.7; de Souza Neto, Peric & Owen 2008,
+// 11.3: the return mapping of Perzyna viscoplasticity with linear rate dependence.)
 // Because sigma depends on eps - eps_p - eps_th at the current K, G, a change of E(T)
 // at fixed strain changes the stress only in proportion to the existing elastic
 // strain: heating an unstressed point creates no stress.
@@ -21,21 +31,25 @@
 // Return mapping (de Souza Neto, Peric & Owen 2008, "Computational Methods for
 // Plasticity", Box 7.3/7.4; Simo & Hughes 1998, "Computational Inelasticity", 3.3):
 // trial state with eps_p frozen; if f_trial > 0, solve the scalar equation
-//     r(dgamma) = q_trial - 3 G dgamma - sigma_y(eps_bar_p_n + dgamma, T) = 0
+//     r(dgamma) = q_trial - 3 G dgamma - sigma_y(eps_bar_p_n + dgamma, T) - H_v dgamma = 0
 // by Newton's method safeguarded by bisection on the bracket [0, q_trial / (3G)]
-// (r(0) > 0, r decreasing since H >= 0, r(q_trial / 3G) = -sigma_y < 0), so it
-// converges for piecewise-linear hardening and near the strength floor. Then
+// (r(0) > 0, r decreasing since H >= 0, r(q_trial / 3G) < 0), so it converges for
+// piecewise-linear hardening and near the strength floor. Then
 //     dev(sigma) = (1 - 3 G dgamma / q_trial) dev(sigma_trial),
 //     D = K 1(x)1 + 2G (1 - 3G dgamma/q_trial) I_dev
-//         + 6 G^2 (dgamma/q_trial - 1/(3G + H)) N(x)N,   N = n_trial,
-// with H = d sigma_y / d eps_bar_p at the converged state.
+//         + 6 G^2 (dgamma/q_trial - 1/(3G + H + H_v)) N(x)N,   N = n_trial,
+// with H = d sigma_y / d eps_bar_p at the converged state and H_v = eta/dt. Near the
+// strength floor H vanishes and the rate-independent tangent is almost singular in the
+// flow direction; H_v keeps it regular, which is what lets the mechanics' Newton
+// iteration converge where the sheets soften and melt.
 //
 // Temperature derivative at fixed total strain and committed state (for a coupled
 // Jacobian): with K' = dK/dT, G' = dG/dT, eps_th' = d eps_th / dT,
 //     elastic: d sigma/dT = (K' tr(eps_e) - 3 K eps_th') 1 + 2 G' dev(eps_e);
 //     plastic: the flow direction N does not depend on T, dev(sigma) = sqrt(2/3) q N,
-//        d dgamma/dT = (q_trial G'/G - 3 G' dgamma - d sigma_y/dT) / (3G + H),
-//        dq/dT = d sigma_y/dT + H d dgamma/dT,
+//        d dgamma/dT = (q_trial G'/G - 3 G' dgamma - d sigma_y/dT - H_v' dgamma)
+//                      / (3G + H + H_v),
+//        dq/dT = d sigma_y/dT + H_v' dgamma + (H + H_v) d dgamma/dT,  H_v' = eta'(T)/dt,
 //        d sigma/dT = (K' tr(eps_e) - 3 K eps_th') 1 + sqrt(2/3) (dq/dT) N.
 //
 // Units: stresses and moduli Pa, strains dimensionless, temperatures degC.
@@ -86,6 +100,7 @@ struct J2Input {
   double thermal_strain = 0;                   // eps_th (isotropic), from Material
   double thermal_strain_slope = 0;             // d eps_th / dT, 1/K
   double temperature = 20;                     // degC
+  double time_step = 0;                        // s, dt of the step; 0 = rate-independent
 };
 
 struct J2Result {

@@ -48,6 +48,9 @@ Material::Material(MaterialData data) : data_(std::move(data)) {
     require(alpha > -1e-3 && alpha < 1e-3, data_,
             "secant expansion coefficient must be a small number per kelvin");
   }
+  for (double eta : data_.flow_viscosity.values()) {
+    require(std::isfinite(eta) && eta >= 0, data_, "flow viscosity must be >= 0");
+  }
   require(!data_.flow_curves.empty(), data_, "has no flow curves");
   require(std::isfinite(data_.solidus) && std::isfinite(data_.liquidus) &&
               data_.liquidus > data_.solidus,
@@ -85,6 +88,10 @@ PropertyValue Material::youngs_modulus(double temperature) const {
 
 PropertyValue Material::poisson_ratio(double temperature) const {
   return data_.poisson_ratio.evaluate(temperature);
+}
+
+PropertyValue Material::flow_viscosity(double temperature) const {
+  return data_.flow_viscosity.evaluate(temperature);
 }
 
 PropertyValue Material::secant_expansion(double temperature) const {

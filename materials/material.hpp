@@ -18,6 +18,11 @@
 // solidus and the table at and below T_s - dT; the hardening modulus is scaled by
 // (1 - w), vanishing in the melt (perfectly plastic floor).
 //
+// Rate dependence of plastic flow (a Perzyna overstress law with exponent 1, used by
+// materials/j2_plasticity): above yield the equivalent stress exceeds the flow stress
+// by eta(T) times the equivalent plastic strain rate, q = sigma_y + eta d(eps_bar_p)/dt;
+// flow_viscosity(T) returns eta in Pa*s. eta = 0 is rate-independent plasticity.
+//
 // Enthalpy per unit mass relative to T_r (for an enthalpy or apparent-heat-capacity
 // thermal integrator):
 //     h(T) = integral_{T_r}^{T} c_p dT' + L f_l(T),
@@ -58,6 +63,7 @@ struct MaterialData {
   PropertyTable youngs_modulus;          // Pa
   PropertyTable poisson_ratio;           // -
   PropertyTable secant_expansion;        // 1/K, secant from reference_temperature
+  PropertyTable flow_viscosity = PropertyTable::constant(0.0);  // Pa*s, eta of the overstress law
   FlowCurveTable flow_curves;            // Pa against eps_p and degC
 
   double solidus = 0;                    // degC
@@ -84,6 +90,7 @@ class Material {
   PropertyValue youngs_modulus(double temperature) const;          // Pa
   PropertyValue poisson_ratio(double temperature) const;           // -
   PropertyValue secant_expansion(double temperature) const;        // 1/K
+  PropertyValue flow_viscosity(double temperature) const;          // Pa*s, eta(T)
 
   // eps_th(T; T_0) and d eps_th / dT (1/K); T_0 is the stress-free temperature.
   PropertyValue thermal_strain(double temperature, double stress_free_temperature) const;

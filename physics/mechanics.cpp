@@ -71,6 +71,7 @@ struct Mechanics::Impl {
   Control last_control = Control::force;
   double load_change = 0;          // ΔF or Δw of the current step
   double predictor_scale = 0;      // set_predictor() for the next force step
+  double time_step = 0;            // s, set_time_step(); 0 = rate-independent
   Eigen::VectorXd total;        // u since the start (full)
   Eigen::VectorXd temperature;  // nodal, °C
   Control control = Control::force;
@@ -290,6 +291,7 @@ struct Mechanics::Impl {
       in.thermal_strain = pc.thermal_strain;
       in.thermal_strain_slope = pc.thermal_strain_slope;
       in.temperature = pc.temperature;
+      in.time_step = time_step;
       const auto result = materials::j2_update(mat, state[k], in);
       trial_strain[k] = eps;
       trial_state[k] = result.state;
@@ -721,6 +723,8 @@ MechanicsStepReport Mechanics::solve_displacement_step(double w, const Eigen::Ve
 
 void Mechanics::set_predictor(double scale) { impl_->predictor_scale = scale; }
 
+void Mechanics::set_time_step(double seconds) { impl_->time_step = seconds; }
+
 void Mechanics::commit() {
   Impl& m = *impl_;
   m.strain = m.trial_strain;
@@ -764,11 +768,13 @@ std::vector<InterfaceState> Mechanics::interface_states() const {
       s.shear.push_back(m.tau[p][i]);
       s.normal_force += pressure * pt.reference_area;
     }
-    // Outermost zero crossing of the gap, interpolated between points.
-    for (std::size_t i = 0; i + 1 < s.gap.size(); ++i) {
-      const double g0 = s.gap[i], g1 = s.gap[i + 1];
-      if (std::isnan(g0) || std::isnan(g1)) continue;
-      if (g0 <= 0 && g1 > 0) s.contact_radius = s.radius[i] + (s.radius[i + 1] - s.radius[i]) * g0 / (g0 - g1);
+    // Outermost zero crossing of the gap, interpolated between points; where the
+    // contact reaches the last paired point (no open point follows it), that point.
+    for (std::size_t i = 0; i < s.gap.size(); ++i) {
+      const double g0 = s.gap[i];
+      if (std::isnan(g0) || g0 > 0) continue;
+      const double g1 = i + 1 < s.gap.size() ? s.gap[i + 1] : std::nan("");
+      s.contact_radius = g1 > 0 ? s.radius[i] + (s.radius[i + 1] - s.radius[i]) * g0 / (g0 - g1) : s.radius[i];
     }
     out.push_back(std::move(s));
   }

@@ -15,7 +15,8 @@
 // Strains use Mandel notation [ε_rr, ε_zz, ε_θθ, √2 ε_rz] with the hoop strain
 // ε_θθ = u_r / r; B̄ replaces the volumetric part of B by its cell average (Hughes
 // 1980) so that isochoric plastic flow does not lock the bilinear elements.
-// Material: J2 plasticity with temperature-dependent E, ν, α and flow curves
+// Material: J2 plasticity with temperature-dependent E, ν, α and flow curves and a
+// viscous overstress η(T) ε̄̇_p over the step length set by set_time_step()
 // (materials/j2_plasticity), driven by the nodal temperature field.
 //
 // Loads: the lower electrode's end face is fixed (u = 0); the upper end face moves
@@ -132,6 +133,11 @@ class Mechanics {
   // rule, and the one with the smaller residual starts Newton; the converged step does
   // not depend on it (up to the tolerance). 0 (the default) tries the rule only.
   void set_predictor(double scale);
+  // Length (s) of the steps that follow, for rate-dependent plastic flow (the
+  // materials' flow_viscosity η: overstress η ε̄̇_p, materials/j2_plasticity). 0 (the
+  // default) is rate-independent, as in the squeeze, whose loading time the model
+  // does not resolve.
+  void set_time_step(double seconds);
   // Accepts the last converged step: history, geometry and totals move forward.
   void commit();
   // Points of sheet/sheet interfaces bonded by melting (flags per pairing point, in

@@ -501,6 +501,7 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
       std::function<bool(double, double, int)> advance = [&](double s0, double s1, int depth) {
         const double length = (s1 - s0) * dt;
         if (last_mechanics_step > 0) mech.set_predictor(length / last_mechanics_step);
+        mech.set_time_step(length);
         report = mech.solve_force_step(F_start + s1 * (F_end - F_start), T_start + s1 * (T_iter - T_start));
         result.n_newton_iterations += report.iterations;
         if (report.converged) {

@@ -3,8 +3,10 @@
 // below yield from hand-computed Lame constants, the yield condition and normality
 // along a load-unload-reverse path, the consistent tangent and the temperature
 // derivative of the stress against central differences, uniaxial stress against the
-// closed form for linear hardening and against the flow curve, and no stress from
-// free thermal expansion.
+// closed form for linear hardening and against the flow curve, no stress from free
+// thermal expansion, and the viscous overstress (Perzyna, exponent 1): the closed-form
+// return of one step, the relaxation of a held strain at the rate 3G/eta, and the
+// tangent and temperature derivative with the overstress on.
 #include "materials/j2_plasticity.hpp"
 #include "materials/material_library.hpp"
 
@@ -88,10 +90,23 @@ MandelMatrix tangent_by_central_differences(const Material& material, const J2St
 MandelVector temperature_slope_by_central_differences(const Material& material,
                                                       const J2State& state,
                                                       const MandelVector& strain,
-                                                      double temperature, double step) {
-  return (j2_update(material, state, input_at(material, strain, temperature + step)).stress -
-          j2_update(material, state, input_at(material, strain, temperature - step)).stress) /
+                                                      double temperature, double step,
+                                                      double time_step = 0) {
+  J2Input plus = input_at(material, strain, temperature + step);
+  J2Input minus = input_at(material, strain, temperature - step);
+  plus.time_step = minus.time_step = time_step;
+  return (j2_update(material, state, plus).stress - j2_update(material, state, minus).stress) /
          (2 * step);
+}
+
+// E = 200 GPa, nu = 0.25 (G = 80 GPa), sigma_y = 300 MPa + H eps_p, viscosity eta.
+Material viscous_material(double hardening, double viscosity) {
+  MaterialData data = base_data("viscous");
+  data.youngs_modulus = PropertyTable::constant(200e9);
+  data.poisson_ratio = PropertyTable::constant(0.25);
+  data.flow_viscosity = PropertyTable::constant(viscosity);
+  data.flow_curves = FlowCurveTable({{20.0, {0.0, 10.0}, {300e6, 300e6 + hardening * 10.0}}});
+  return Material(data);
 }
 
 // Distance of eps_bar_p from the nearest strain point of the curves bracketing T, so
@@ -367,6 +382,100 @@ TEST(J2, StressTemperatureDerivativeMatchesFiniteDifference) {
     EXPECT_LT(relative_error(difference, r.stress_temperature_derivative), 1e-6)
         << "analytic " << r.stress_temperature_derivative.transpose() << "\nfinite difference "
         << difference.transpose();
+  }
+}
+
+// One step from the virgin state with a pure shear strain gamma (eps_rz = gamma/2):
+// q_trial = sqrt(3) G gamma, and the return equation is linear,
+//     dgamma = (q_trial - sigma_y0) / (3G + H + eta/dt),  q = q_trial - 3 G dgamma.
+TEST(J2, ViscousOverstressMatchesClosedFormStep) {
+  const double G = 80e9, H = 2000e6, eta = 2e6, dt = 1e-3, sigma_y0 = 300e6;
+  const Material material = viscous_material(H, eta);
+  const double gamma = 0.01;
+  J2Input input = input_at(material, to_mandel(0, 0, 0, 0.5 * gamma), 20.0);
+  input.time_step = dt;
+  const J2Result r = j2_update(material, J2State{}, input);
+  ASSERT_TRUE(r.yielded);
+  const double q_trial = std::sqrt(3.0) * G * gamma;
+  const double dgamma = (q_trial - sigma_y0) / (3 * G + H + eta / dt);
+  EXPECT_NEAR(r.plastic_increment, dgamma, 1e-12 * dgamma);
+  EXPECT_NEAR(r.equivalent_stress, q_trial - 3 * G * dgamma, 1e-9 * q_trial);
+  // The overstress above the (static) flow stress is eta times the plastic rate.
+  EXPECT_NEAR(r.equivalent_stress - r.yield_stress, eta * dgamma / dt, 1e-9 * q_trial);
+  // dt = 0 is the rate-independent limit.
+  input.time_step = 0;
+  const J2Result rate_independent = j2_update(material, J2State{}, input);
+  EXPECT_NEAR(rate_independent.plastic_increment, (q_trial - sigma_y0) / (3 * G + H), 1e-12 * dgamma);
+}
+
+// A strain held after a fast step: with perfect plasticity the plastic rate is
+// (q - sigma_y)/eta and dq/dt = -3G (q - sigma_y)/eta, so the overstress relaxes as
+// exp(-3 G t / eta); backward Euler gives the factor 1/(1 + 3 G dt/eta) per step
+// exactly, and the exponential as dt -> 0 (first order).
+TEST(J2, HeldStrainRelaxesAtTheViscousRate) {
+  const double G = 80e9, eta = 4e6, sigma_y = 300e6;
+  const Material material = viscous_material(0.0, eta);
+  const MandelVector strain = to_mandel(0, 0, 0, 0.5 * 0.02);
+  const double tau = eta / (3 * G);  // s, relaxation time
+  const double total_time = 2 * tau;
+  double previous_error = 0;
+  for (int n : {20, 40, 80}) {
+    const double dt = total_time / n;
+    J2Input input = input_at(material, strain, 20.0);
+    input.time_step = 1e-6;  // the fast step that loads the point
+    J2Result r = j2_update(material, J2State{}, input);
+    const double overstress0 = r.equivalent_stress - sigma_y;
+    ASSERT_GT(overstress0, 10e6);
+    input.time_step = dt;
+    double overstress = overstress0;
+    for (int k = 0; k < n; ++k) {
+      r = j2_update(material, r.state, input);
+      const double next = r.equivalent_stress - sigma_y;
+      EXPECT_NEAR(next / overstress, 1 / (1 + 3 * G * dt / eta), 1e-9);
+      overstress = next;
+    }
+    const double error = std::abs(overstress / overstress0 - std::exp(-total_time / tau));
+    EXPECT_LT(error, 0.1);
+    if (previous_error > 0) {
+      EXPECT_NEAR(previous_error / error, 2.0, 0.2);  // first order
+    }
+    previous_error = error;
+  }
+}
+
+TEST(J2, ViscousTangentAndTemperatureSlopeMatchFiniteDifferences) {
+  const Material steel = dp1200();
+  const MandelVector uniaxial_like = to_mandel(-0.5, 1.0, -0.5, 0.0);
+  struct Case {
+    double temperature;
+    MandelVector first, second;
+  };
+  const std::vector<Case> cases = {
+      {650, 0.01 * uniaxial_like, 0.02 * uniaxial_like + to_mandel(0, 2e-3, 0, 3e-3)},
+      {1150, 0.01 * uniaxial_like, 0.015 * uniaxial_like + to_mandel(1e-3, 0, 0, 1e-3)},
+      {1445, 0.01 * uniaxial_like, 0.015 * uniaxial_like + to_mandel(1e-3, 0, 0, 1e-3)},
+      {1490, 0.01 * uniaxial_like, 0.015 * uniaxial_like + to_mandel(1e-3, 0, 0, 1e-3)},
+  };
+  const double dt = 1e-3;
+  for (const Case& c : cases) {
+    SCOPED_TRACE("DP1200 at " + std::to_string(c.temperature) + " degC");
+    ASSERT_GT(steel.flow_viscosity(c.temperature).value, 0.0);
+    J2Input first = input_at(steel, c.first, c.temperature);
+    first.time_step = dt;
+    const J2State committed = j2_update(steel, J2State{}, first).state;
+    J2Input input = input_at(steel, c.second, c.temperature);
+    input.time_step = dt;
+    const J2Result r = j2_update(steel, committed, input);
+    ASSERT_TRUE(r.yielded);
+    // The overstress is there: more than the rate-independent return leaves.
+    EXPECT_GT(r.equivalent_stress - r.yield_stress, 1e-3 * r.yield_stress);
+    ASSERT_GT(distance_to_strain_point(steel, r.state.equivalent_plastic_strain), 1e-5);
+    EXPECT_LT(relative_error(tangent_by_central_differences(steel, committed, input, 1e-8), r.tangent), 1e-6);
+    const MandelVector slope =
+        temperature_slope_by_central_differences(steel, committed, c.second, c.temperature, 1e-3, dt);
+    EXPECT_LT(relative_error(slope, r.stress_temperature_derivative), 1e-6)
+        << "analytic " << r.stress_temperature_derivative.transpose() << "\nfinite difference "
+        << slope.transpose();
   }
 }
 

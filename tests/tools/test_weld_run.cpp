@@ -113,3 +113,23 @@ TEST(WeldRun, FieldsOpenInVtkAndSignalsInHdf5) {
   std::string out;
   EXPECT_EQ(std::system(("h5dump -H " + (coarse_run() / "results.h5").string() + " > /dev/null").c_str()), 0);
 }
+
+// The electrodes press on the sheets throughout, so the electrode/sheet contact radii
+// stay positive and do not shrink while the current flows (the contact grows as the
+// sheets soften). Until 2026-11-22 the radius was the outermost gap sign change and
+// fell to 0 once the contact reached the last paired point near the face edge.
+TEST(WeldRun, ElectrodeContactRadiusStaysPositiveUnderForce) {
+  const auto run = read_csv(coarse_run() / "signals.csv");
+  for (const char* name : {"contact_radius_es_upper [m]", "contact_radius_es_lower [m]"}) {
+    ASSERT_TRUE(run.count(name)) << name;
+    const auto& radius = run.at(name);
+    const auto& current = run.at("current [A]");
+    for (std::size_t i = 1; i < radius.size(); ++i) {
+      EXPECT_GT(radius[i], 0.5e-3) << name << " at row " << i;
+      if (current[i] > 0 && current[i - 1] > 0) EXPECT_GE(radius[i], radius[i - 1] - 1e-6) << name << " at row " << i;
+    }
+  }
+  std::ifstream in(coarse_run() / "summary.json");
+  const auto j = nlohmann::json::parse(in);
+  EXPECT_GT(j.at("nugget").at("w_elec").get<double>(), 2 * 0.5e-3);
+}
