@@ -215,10 +215,12 @@ ConfigSchema build_schema() {
            "(paper eq. 3); prior uniform [35, 200] W/(m*K); default 117.5, the centre of the "
            "prior (the paper's nominal 35 is its lower bound).");
 
-  s.number("thermal.melt_conductivity_band", "K", "K").default_value("0 K")
+  s.number("thermal.melt_conductivity_band", "K", "K").default_value("20 K")
       .range(Range::closed(0, 200))
-      .doc("Width of a smooth blend from the conductivity table to lambda_m just below the "
-           "melting temperature; 0 is the paper's switch (eq. 3).");
+      .doc("Width of a smooth (C1) blend from the conductivity table to lambda_m just below the "
+           "melting temperature. 0 is the paper's switch (eq. 3), a jump of k(T) with which the "
+           "electro-thermal coupling can oscillate without converging and the outputs jump with "
+           "the parameters; 20 K (default) is narrow against the 45 K freezing range of DP1200.");
 
   s.section("solver", "Numerical settings. None depends on the model parameters, so every "
                      "output stays a smooth function of them (fixed step schedule, fixed "
@@ -256,6 +258,12 @@ ConfigSchema build_schema() {
       .doc("Anderson acceleration depth of the electro-thermal fixed-point iteration (SUNDIALS "
            "KINSOL): the last this-many iterates are combined; 0 is plain (Picard) iteration, "
            "which diverges where the current crowds into a heating contact edge.");
+
+  s.choice("solver.electrode_melting", {"continue", "stop"}).default_value("continue")
+      .doc("When an electrode node first reaches the solidus of its material (the electrode face "
+           "melts: sticking, outside what the model represents): continue records a warning with "
+           "the time, place and temperature in summary.json and results.h5 and goes on (outputs "
+           "stay continuous in the parameters, which calibration needs); stop fails the run there.");
 
   s.section("output", "What a run writes.");
   s.string("output.directory").default_value("results")
@@ -470,6 +478,7 @@ Problem make_problem(const Config& config) {
   solver.seat_step = config.number("solver.seat_step");
   solver.contact_penalty_factor = config.number("solver.contact_penalty_factor");
   solver.contact_smoothing = config.number("solver.contact_smoothing");
+  solver.stop_on_electrode_melting = config.text("solver.electrode_melting") == "stop";
   solver.coupling_tolerance = config.number("solver.coupling_tolerance");
   solver.max_coupling_iterations = config.integer("solver.max_coupling_iterations");
   solver.coupling_acceleration_depth = config.integer("solver.coupling_acceleration_depth");

@@ -59,7 +59,7 @@ struct ThermalParameters {
   double air_htc = 0;              // W/(m^2*K), other free surfaces
   double ambient_temperature = 0;  // degC
   double melt_conductivity = 0;    // W/(m*K), lambda_m of paper eq. 3
-  double melt_conductivity_band = 0;  // K, blend from the table to lambda_m below T_melting (0: switch)
+  double melt_conductivity_band = 20;  // K, blend from the table to lambda_m below T_melting (0: switch)
 };
 
 struct SolverSettings {
@@ -71,6 +71,7 @@ struct SolverSettings {
   double coupling_tolerance = 0;      // K, electro-thermal fixed-point tolerance
   int max_coupling_iterations = 0;
   int coupling_acceleration_depth = 5;  // Anderson depth (0: plain fixed-point iteration)
+  bool stop_on_electrode_melting = false;  // fail the run when an electrode reaches its solidus
 };
 
 struct OutputSettings {

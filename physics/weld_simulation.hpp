@@ -28,6 +28,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -67,6 +68,10 @@ struct RunResult {
   std::vector<std::pair<std::string, double>> squeeze_contact_radius;  // per interface, m
   std::vector<std::pair<std::string, double>> squeeze_peak_pressure;   // per interface, Pa
   double squeeze_indentation = 0;   // m, sheet_1 top on the axis relative to r = cap radius
+  // Warnings of a successful run (e.g. an electrode that reached its solidus with
+  // solver.electrode_melting = continue), in the order they arose.
+  std::vector<std::string> warnings;
+  double electrode_melting_time = std::nan("");  // s, first step with an electrode node at its solidus
 };
 
 struct Progress {

@@ -42,6 +42,7 @@ void run_simulate(const SimulateOptions& options) {
   std::printf("time:");
   for (const auto& [part, seconds] : result.timing) std::printf(" %s %.2f s,", part.c_str(), seconds);
   std::printf(" total %.2f s\n", result.wall_time);
+  for (const auto& w : result.warnings) std::printf("warning: %s\n", w.c_str());
   std::printf("after the squeeze: electrode travel %.2f um, indentation %.2f um\n",
               result.squeeze_displacement * 1e6, result.squeeze_indentation * 1e6);
   for (std::size_t i = 0; i < result.squeeze_contact_radius.size(); ++i)

@@ -133,3 +133,34 @@ TEST(WeldRun, ElectrodeContactRadiusStaysPositiveUnderForce) {
   const auto j = nlohmann::json::parse(in);
   EXPECT_GT(j.at("nugget").at("w_elec").get<double>(), 2 * 0.5e-3);
 }
+
+// A very resistive electrode/sheet film (t_f = 0.03 mm) heats the electrode face to
+// the CuCrZr solidus about 19 ms into the weld. By default the run records that as a
+// warning (summary.json, results.h5) and finishes; with solver.electrode_melting=stop
+// it fails there, naming the electrode.
+TEST(WeldRun, ElectrodeReachingSolidusWarnsOrStopsAsConfigured) {
+  const std::string args = " -q --set mesh.base_size=0.5mm --set mesh.weld_zone.levels=1 --set output.fields=false"
+                           " --set contact.electrode_sheet.film_thickness=0.03mm"
+                           " --set \"schedule.current=[[0 ms,0 kA],[10 ms,8 kA],[30 ms,8 kA],[31 ms,0 kA]]\""
+                           " --set \"schedule.force=[[0 ms,3 kN],[31 ms,3 kN]]\" --set schedule.cool_time=0ms";
+  const fs::path base = fs::temp_directory_path() / ("rsw_melting_" + std::to_string(::getpid()));
+  std::string out;
+  ASSERT_EQ(run_rsw("simulate " + paper_case + " -o " + (base / "continue").string() + args, out), 0) << out;
+  EXPECT_NE(out.find("warning: at t = "), std::string::npos) << out;
+  std::ifstream in(base / "continue" / "summary.json");
+  const auto j = nlohmann::json::parse(in);
+  ASSERT_EQ(j.at("warnings").size(), 1u);
+  EXPECT_NE(j.at("warnings")[0].get<std::string>().find("above the solidus"), std::string::npos);
+  const double t_melt = j.at("electrode_melting_time_s").get<double>();
+  EXPECT_GT(t_melt, 0.010);
+  EXPECT_LT(t_melt, 0.031);
+  rsw::fem::Hdf5File h5(base / "continue" / "results.h5", rsw::fem::Hdf5Mode::read);
+  EXPECT_EQ(h5.read_doubles("/signals/voltage").size(), read_csv(base / "continue" / "signals.csv").at("time [s]").size());
+
+  out.clear();
+  EXPECT_NE(run_rsw("simulate " + paper_case + " -o " + (base / "stop").string() + args +
+                        " --set solver.electrode_melting=stop", out), 0);
+  EXPECT_NE(out.find("above the solidus of its material"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(base / "stop" / "summary.json"));
+  fs::remove_all(base);
+}
