@@ -8,6 +8,7 @@
 // whose one "feature" says whether the model wrote signals (1) or has none (0); the
 // adapter calls ForwardModel::simulate_signals(θ, predictive/<run>/).
 #include "tools/calibrate_command.hpp"
+#include "tools/plots.hpp"
 
 #include "calibration/calibrate.hpp"
 #include "calibration/calibration_study.hpp"
@@ -50,6 +51,7 @@ struct CalibrateOptions {
   bool resume = false;
   double run_timeout = 0;
   bool quiet = false;
+  bool plots = true;
 };
 
 // --- text helpers ------------------------------------------------------------------
@@ -654,6 +656,9 @@ void run_calibrate(const CalibrateOptions& options, const ForwardModelFactory& f
   for (const auto& file : {files.h5, files.posterior_csv, files.diagnostics_csv, files.json}) {
     std::printf("  written: %s\n", file.string().c_str());
   }
+  std::fflush(stdout);
+  // Corner plot, convergence history and predictive overlay (tools/plot_calibration.py).
+  if (options.plots) rsw::tools::run_plot_script("plot_calibration.py", {files.json.string()});
 }
 
 }  // namespace
@@ -676,6 +681,8 @@ void add_calibrate_command(CLI::App& app, ForwardModelFactory model_factory) {
                         "Time limit per run in seconds (0: none); a run over it is recorded as failed")
       ->check(CLI::NonNegativeNumber);
   calibrate->add_flag("-q,--quiet", options->quiet, "No progress lines");
+  calibrate->add_flag("!--no-plots", options->plots,
+                      "Do not draw the corner, convergence and predictive plots (tools/plot_calibration.py)");
   calibrate->callback([options, factory]() {
     try {
       run_calibrate(*options, *factory);

@@ -3,6 +3,7 @@
 // failure reason, the undefined features of a successful run) is written whenever a
 // study file is complete, after `run` or `merge`.
 #include "tools/study_commands.hpp"
+#include "tools/plots.hpp"
 
 #include "calibration/farm.hpp"
 #include "calibration/features.hpp"
@@ -43,6 +44,7 @@ struct StudyOptions {
   bool quiet = false;
   std::vector<std::string> parts;
   std::string format = "markdown";
+  bool plots = true;
 };
 
 cal::Study load_study(const StudyOptions& options) {
@@ -228,9 +230,14 @@ void study_sensitivity(const StudyOptions& options) {
   const cal::StudyResults results = cal::read_study_results(study.results_file());
   const cal::SensitivityReport report = cal::analyse_sensitivity(study.design(), results, study.pce_options());
   std::cout << cal::format_sensitivity_summary(report);
+  std::string json;
   for (const auto& table : cal::write_sensitivity_tables(report, study.output_folder(), study.name())) {
     std::cout << "table: " << table.string() << "\n";
+    if (table.extension() == ".json") json = table.string();
   }
+  std::cout.flush();
+  // Sobol heatmaps, features x parameters (tools/plot_study.py, paper Figs. 4-5).
+  if (options.plots && !json.empty()) rsw::tools::run_plot_script("plot_study.py", {"sobol", json});
 }
 
 void show_study(const StudyOptions& options) {
@@ -340,6 +347,7 @@ void add_study_commands(CLI::App& app, ForwardModelFactory model_factory) {
   CLI::App* sensitivity =
       study->add_subcommand("sensitivity", "Sparse PCE and Sobol indices per feature of a finished study; CSV/JSON tables");
   add_study_file(sensitivity);
+  sensitivity->add_flag("!--no-plots", options->plots, "Do not draw the Sobol heatmaps (tools/plot_study.py)");
   sensitivity->callback([options]() { study_sensitivity(*options); });
 
   CLI::App* show = study->add_subcommand("show", "Print the resolved study file and the size of its design");

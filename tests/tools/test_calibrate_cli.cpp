@@ -282,3 +282,30 @@ TEST(CalibrateCli, PlotScriptDrawsCornerConvergenceAndPredictive) {
   EXPECT_NE(r.output.find("no parameter 'c' (the calibration has: a, b)"), std::string::npos) << r.output;
   fs::remove_all(dir);
 }
+
+// One command gives the tables and the pictures: rsw calibrate runs
+// tools/plot_calibration.py itself; --no-plots skips it, and a missing interpreter
+// is a note with the command to run later, not a failure.
+TEST(CalibrateCli, WritesPlotsUnlessToldNotTo) {
+  const CommandResult has_libraries = run_command("/usr/bin/python3 -c 'import matplotlib, h5py, numpy'");
+  if (has_libraries.status != 0) {
+    GTEST_SKIP() << "/usr/bin/python3 lacks matplotlib, h5py or numpy (run tools/setup.sh): " << has_libraries.output;
+  }
+  const fs::path dir = fresh_dir("autoplot");
+  const fs::path study = write_calibration_study(dir, "auto", "analytic: {function: smooth}\n");
+  CommandResult r = run_rsw("calibrate " + study.string() + " -q -o " + (dir / "with").string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  for (const char* file : {"auto_corner.png", "auto_convergence.png"}) {
+    EXPECT_TRUE(fs::exists(dir / "with" / file)) << file << "\n" << r.output;
+  }
+  r = run_rsw("calibrate " + study.string() + " -q --no-plots -o " + (dir / "without").string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_TRUE(fs::exists(dir / "without" / "auto_calibration.json"));
+  EXPECT_FALSE(fs::exists(dir / "without" / "auto_corner.png"));
+  r = run_command("RSW_PYTHON=/nonexistent/python3 " + std::string(RSW_ANALYTIC_BINARY) + " calibrate " + study.string() +
+                  " -q -o " + (dir / "nopython").string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("note: plots not made (/nonexistent/python3 not found"), std::string::npos) << r.output;
+  EXPECT_TRUE(fs::exists(dir / "nopython" / "auto_calibration.json"));
+  fs::remove_all(dir);
+}

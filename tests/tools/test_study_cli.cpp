@@ -331,3 +331,24 @@ model: {case: case.yaml}
   EXPECT_NE(r.output.find("is not a one-at-a-time study"), std::string::npos) << r.output;
   fs::remove_all(dir);
 }
+
+// rsw study sensitivity draws the Sobol heatmaps itself (tools/plot_study.py) unless
+// --no-plots.
+TEST(StudyCli, SensitivityDrawsHeatmapsUnlessToldNotTo) {
+  const CommandResult has_libraries = run_command("/usr/bin/python3 -c 'import matplotlib, h5py, numpy'");
+  if (has_libraries.status != 0) {
+    GTEST_SKIP() << "/usr/bin/python3 lacks matplotlib, h5py or numpy (run tools/setup.sh): " << has_libraries.output;
+  }
+  const fs::path dir = fresh_dir("heatmaps");
+  const fs::path study = write_lhs_study(dir, "maps", 30);
+  const fs::path out = dir / "out";
+  ASSERT_EQ(run_rsw("study run " + study.string() + " -q -o " + out.string()).status, 0);
+  CommandResult r = run_rsw("study sensitivity " + study.string() + " --no-plots -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_FALSE(fs::exists(out / "maps_sobol_first_order.png"));
+  r = run_rsw("study sensitivity " + study.string() + " -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_TRUE(fs::exists(out / "maps_sobol_first_order.png")) << r.output;
+  EXPECT_TRUE(fs::exists(out / "maps_sobol_total_order.png")) << r.output;
+  fs::remove_all(dir);
+}
