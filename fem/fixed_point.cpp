@@ -82,6 +82,11 @@ FixedPointReport solve_fixed_point(const FixedPointMap& G, Eigen::VectorXd& u, c
   KINSetFuncNormTol(kin, settings.tolerance);
   KINSetErrHandlerFn(kin, silent, nullptr);
   KINSetPrintLevel(kin, 0);
+  const double beta = std::clamp(settings.damping, 1e-3, 1.0);
+  if (beta < 1.0) {
+    KINSetDamping(kin, beta);    // plain iteration (depth 0)
+    KINSetDampingAA(kin, beta);  // Anderson
+  }
 
   const int flag = KINSol(kin, uu, KIN_FP, scale, scale);
   long iterations = 0;

@@ -9,7 +9,10 @@
 // squares sense:
 //     u_{k+1} = G(u_k) − Σ_i γ_i ΔG_i,   γ = argmin |f_k − Σ_i γ_i Δf_i|₂,
 // a multisecant quasi-Newton step that also finds fixed points that plain iteration
-// runs away from. Depth 0 is plain iteration.
+// runs away from. Depth 0 is plain iteration. Damping β ∈ (0, 1] relaxes each update,
+// u_{k+1} = (1 − β) ũ_k + β G̃_k (ũ, G̃ the accelerated iterate and map value; KINSOL's
+// KINSetDamping/KINSetDampingAA): β < 1 trades speed for robustness where G is only
+// piecewise smooth (kinks of tabulated properties) and the undamped iteration cycles.
 //
 // Stopping (KINSOL's test for KIN_FP): the ∞-norm of the change of the iterate,
 // |u_{k+1} − u_k|_∞ ≤ tolerance, in the units of u. On success `u` holds the last
@@ -28,6 +31,7 @@ struct FixedPointSettings {
   int depth = 5;             // Anderson depth m (0: plain fixed-point iteration)
   double tolerance = 1e-8;   // on |u_{k+1} − u_k|_∞, units of u
   int max_iterations = 50;   // evaluations of G
+  double damping = 1.0;      // β in (0, 1]; 1 = undamped
 };
 
 struct FixedPointReport {

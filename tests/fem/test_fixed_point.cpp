@@ -105,3 +105,25 @@ TEST(FixedPoint, AMapThatFailsStopsTheIterationWithItsReason) {
   EXPECT_EQ(report.message, "thermal solve failed");
   EXPECT_EQ(calls, 3);
 }
+
+// G(u) = 2 − u has gain −1: plain iteration cycles between u₀ and 2 − u₀ for ever.
+// With damping β the update is u ← (1 − β) u + β (2 − u) = u + β (2 − 2u), which
+// for β = 1/2 lands on the fixed point 1 in one step.
+TEST(FixedPoint, DampingStopsThePlainIterationFromCycling) {
+  const auto reflect = [](const Eigen::VectorXd& x, Eigen::VectorXd& g) {
+    g = 2.0 - x.array();
+    return true;
+  };
+  FixedPointSettings s;
+  s.depth = 0;
+  s.max_iterations = 20;
+  s.tolerance = 1e-12;
+  Eigen::VectorXd u = Eigen::VectorXd::Constant(1, 0.3);
+  EXPECT_FALSE(solve_fixed_point(reflect, u, s).converged);
+  s.damping = 0.5;
+  u = Eigen::VectorXd::Constant(1, 0.3);
+  const auto report = solve_fixed_point(reflect, u, s);
+  ASSERT_TRUE(report.converged) << report.message;
+  EXPECT_NEAR(u[0], 1.0, 1e-12);
+  EXPECT_LE(report.iterations, 3);
+}
