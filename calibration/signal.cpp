@@ -530,9 +530,15 @@ Signal read_signal_csv(const std::string& path) {
     std::vector<double> row(fields.size());
     for (std::size_t i = 0; i < fields.size(); ++i) {
       double value = 0;
+      if (lower(trim(fields[i])) == "nan" && columns[i].name == signal_column::resistance) {
+        // rsw simulate writes R = V/I as nan where no current flows; see below.
+        row[i] = std::nan("");
+        continue;
+      }
       if (!parse_number(fields[i], value)) {
         throw SignalError(where(line_number) + column_label(i) + ": '" + fields[i] +
-                          "' is not a finite number");
+                          "' is not a finite number" +
+                          (columns[i].name == signal_column::resistance ? "" : " ('nan' is read only in a resistance column)"));
       }
       row[i] = value;
     }
@@ -560,8 +566,22 @@ Signal read_signal_csv(const std::string& path) {
     time[k] = columns[time_index].scale * raw + columns[time_index].offset;
   }
   Signal signal(time);
+  const auto has = [&](const char* name) {
+    return std::any_of(columns.begin(), columns.end(), [&](const ColumnSpec& c) { return c.name == name; });
+  };
   for (std::size_t i = 0; i < columns.size(); ++i) {
     if (i == time_index) continue;
+    // A resistance column with nan rows (no current there, as rsw simulate writes it)
+    // is left out when voltage and current are given: the extractor forms V/I itself.
+    for (Eigen::Index k = 0; k < n; ++k)
+      if (std::isnan(data[k][i])) {
+        if (has(signal_column::voltage) && has(signal_column::current)) break;
+        throw SignalError(where(data_lines[k]) + column_label(i) +
+                          ": 'nan' in a resistance column needs voltage and current columns to replace it");
+      }
+    if (columns[i].name == signal_column::resistance &&
+        std::any_of(data.begin(), data.end(), [i](const std::vector<double>& r) { return std::isnan(r[i]); }))
+      continue;
     Eigen::VectorXd values(n);
     for (Eigen::Index k = 0; k < n; ++k) values[k] = columns[i].scale * data[k][i] + columns[i].offset;
     signal.add_column(columns[i].name, columns[i].si_unit, std::move(values));

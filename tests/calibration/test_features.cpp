@@ -631,6 +631,22 @@ TEST_F(SignalCsv, ReadsEngineeringUnitsIntoSi) {
   EXPECT_EQ(signal.unit(signal_column::temperature), "degC");
 }
 
+// rsw simulate writes R = V/I as nan where no current flows: with voltage and current
+// present the resistance column is left out (the extractor forms V/I); without them,
+// and in any other column, nan is an error naming the line and the column.
+TEST_F(SignalCsv, NanResistanceIsReplacedByVoltageOverCurrent) {
+  const Signal signal = read_signal_csv(write(
+      "sim.csv", "time [s],current [A],voltage [V],resistance [ohm]\n0,0,0,nan\n0.001,8000,1.6,0.0002\n"));
+  EXPECT_FALSE(signal.has_column(signal_column::resistance));
+  EXPECT_DOUBLE_EQ(signal.column(signal_column::voltage)[1], 1.6);
+  const std::string alone = read_error(write("alone.csv", "time [s],current [A],resistance [ohm]\n0,0,nan\n0.001,1,2\n"));
+  EXPECT_NE(alone.find("alone.csv:2"), std::string::npos) << alone;
+  EXPECT_NE(alone.find("'nan' in a resistance column needs voltage and current columns"), std::string::npos) << alone;
+  const std::string other = read_error(write("other.csv", "time [s],current [A],voltage [V]\n0,nan,0\n0.001,1,2\n"));
+  EXPECT_NE(other.find("'nan' is not a finite number ('nan' is read only in a resistance column)"), std::string::npos)
+      << other;
+}
+
 TEST_F(SignalCsv, ResistanceMayReplaceVoltage) {
   const Signal signal = read_signal_csv(
       write("r.csv", "time [s], current [A], resistance [µΩ]\n0, 1, 150\n0.001, 2, 160.5\n"));

@@ -164,3 +164,13 @@ TEST(WeldRun, ElectrodeReachingSolidusWarnsOrStopsAsConfigured) {
   EXPECT_FALSE(fs::exists(base / "stop" / "summary.json"));
   fs::remove_all(base);
 }
+
+// One feature extractor for simulated and measured signals: rsw features reads the
+// signals.csv that rsw simulate writes (its resistance column is nan where no current
+// flows; V/I is formed from the voltage and current columns instead).
+TEST(WeldRun, FeaturesReadTheSimulatedSignalFile) {
+  std::string out;
+  ASSERT_EQ(run_rsw("features " + (coarse_run() / "signals.csv").string(), out), 0) << out;
+  EXPECT_NE(out.find("R_beta"), std::string::npos) << out;
+  EXPECT_NE(out.find("dS_P"), std::string::npos) << out;
+}
