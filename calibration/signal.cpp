@@ -573,15 +573,13 @@ Signal read_signal_csv(const std::string& path) {
     if (i == time_index) continue;
     // A resistance column with nan rows (no current there, as rsw simulate writes it)
     // is left out when voltage and current are given: the extractor forms V/I itself.
-    for (Eigen::Index k = 0; k < n; ++k)
-      if (std::isnan(data[k][i])) {
-        if (has(signal_column::voltage) && has(signal_column::current)) break;
-        throw SignalError(where(data_lines[k]) + column_label(i) +
-                          ": 'nan' in a resistance column needs voltage and current columns to replace it");
-      }
-    if (columns[i].name == signal_column::resistance &&
-        std::any_of(data.begin(), data.end(), [i](const std::vector<double>& r) { return std::isnan(r[i]); }))
-      continue;
+    // (Only resistance columns can hold nan: the row parser rejects it elsewhere.)
+    const auto first_nan = std::find_if(data.begin(), data.end(), [i](const std::vector<double>& r) { return std::isnan(r[i]); });
+    if (first_nan != data.end()) {
+      if (has(signal_column::voltage) && has(signal_column::current)) continue;
+      throw SignalError(where(data_lines[static_cast<std::size_t>(first_nan - data.begin())]) + column_label(i) +
+                        ": 'nan' in a resistance column needs voltage and current columns to replace it");
+    }
     Eigen::VectorXd values(n);
     for (Eigen::Index k = 0; k < n; ++k) values[k] = columns[i].scale * data[k][i] + columns[i].offset;
     signal.add_column(columns[i].name, columns[i].si_unit, std::move(values));

@@ -53,7 +53,7 @@ const std::vector<TableProperty>& table_properties() {
        "Secant (mean) linear expansion coefficient alpha(T) from 20 degC: "
        "eps_th = alpha(T) (T - 20 degC).",
        &MaterialData::secant_expansion},
-      {"flow_viscosity", "viscosity", "Pa*s", "MPa*s", fem::Range::closed(0, 1e10),
+      {"flow_viscosity", "viscosity", "Pa*s", "MPa*s", fem::Range::closed(0, 1e4),
        "Viscosity eta(T) of plastic flow: above yield the equivalent stress is "
        "sigma_y + eta d(eps_bar_p)/dt (Perzyna overstress, exponent 1); 0 = rate-independent.",
        &MaterialData::flow_viscosity},
