@@ -516,7 +516,7 @@ void Thermal::set_temperature(const Eigen::VectorXd& nodal_temperature) {
 
 ThermalStepReport Thermal::solve(double dt, const std::vector<fem::Point>& positions,
                                  const contact::ContactState& contact, const std::vector<double>& joule_heat,
-                                 const std::vector<std::vector<double>>& interface_heat) {
+                                 const std::vector<std::vector<double>>& interface_heat, double tolerance_override) {
   Impl& m = *impl_;
   if (!(dt > 0)) throw std::invalid_argument("Thermal: the time step must be positive");
   if (static_cast<int>(positions.size()) != m.mesh.n_nodes())
@@ -542,7 +542,7 @@ ThermalStepReport Thermal::solve(double dt, const std::vector<fem::Point>& posit
   m.interface_conductances();
 
   ThermalStepReport report;
-  const double tolerance = m.settings.temperature_tolerance;
+  const double tolerance = tolerance_override > 0 ? tolerance_override : m.settings.temperature_tolerance;
   m.evaluate(refactor);
   double previous_norm = 0;
   for (int it = 1; it <= m.settings.max_iterations; ++it) {

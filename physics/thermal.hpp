@@ -155,9 +155,11 @@ class Thermal {
   // step starts from predicted_temperature(dt); repeated calls before commit()
   // (staggered coupling) start from the previous call's result, or from the field
   // given to set_start().
+  // `tolerance` (K, > 0) replaces settings.temperature_tolerance for this solve: a
+  // coupling iteration far from its fixed point needs the field only roughly.
   ThermalStepReport solve(double dt, const std::vector<fem::Point>& positions, const contact::ContactState& contact,
                           const std::vector<double>& joule_heat,
-                          const std::vector<std::vector<double>>& interface_heat);
+                          const std::vector<std::vector<double>>& interface_heat, double tolerance = 0);
   // The field a new step of length dt starts from: the linear extrapolation of the
   // last two committed fields (the committed field at the first step or without
   // `extrapolate`).
