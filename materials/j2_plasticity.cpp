@@ -74,7 +74,24 @@ J2Input j2_input(const Material& material, const MandelVector& strain, double te
   return input;
 }
 
+J2Coefficients j2_coefficients(const Material& material, const J2State& committed, double temperature,
+                               double time_step) {
+  J2Coefficients c;
+  c.moduli = elastic_moduli(material, temperature);
+  c.initial = material.yield_stress(committed.equivalent_plastic_strain, temperature);
+  if (time_step > 0) c.viscosity = material.flow_viscosity(temperature);
+  return c;
+}
+
 J2Result j2_update(const Material& material, const J2State& committed, const J2Input& input) {
+  if (!std::isfinite(input.temperature) || !std::isfinite(committed.equivalent_plastic_strain))
+    throw std::invalid_argument("J2 update (" + material.name() + "): non-finite input");
+  return j2_update(material, committed, input,
+                   j2_coefficients(material, committed, input.temperature, input.time_step));
+}
+
+J2Result j2_update(const Material& material, const J2State& committed, const J2Input& input,
+                   const J2Coefficients& coefficients) {
   if (!input.strain.allFinite() || !std::isfinite(input.thermal_strain) ||
       !std::isfinite(input.thermal_strain_slope) || !std::isfinite(input.temperature) ||
       !committed.plastic_strain.allFinite() ||
@@ -82,7 +99,7 @@ J2Result j2_update(const Material& material, const J2State& committed, const J2I
     throw std::invalid_argument("J2 update (" + material.name() + "): non-finite input");
   }
   const double temperature = input.temperature;
-  const ElasticModuli moduli = elastic_moduli(material, temperature);
+  const ElasticModuli& moduli = coefficients.moduli;
   const double bulk = moduli.bulk_modulus;
   const double shear = moduli.shear_modulus;
   const MandelVector one = mandel_identity();
@@ -97,11 +114,11 @@ J2Result j2_update(const Material& material, const J2State& committed, const J2I
   const double trial_norm = trial_deviator.norm();
   const double trial_q = sqrt_three_halves * trial_norm;
   const double eps_bar_n = committed.equivalent_plastic_strain;
-  const FlowStress initial = material.yield_stress(eps_bar_n, temperature);
+  const FlowStress& initial = coefficients.initial;
   // Viscous overstress modulus H_v = eta/dt and its temperature slope.
   double viscous = 0, viscous_slope = 0;
   if (input.time_step > 0) {
-    const PropertyValue eta = material.flow_viscosity(temperature);
+    const PropertyValue& eta = coefficients.viscosity;
     viscous = eta.value / input.time_step;
     viscous_slope = eta.slope / input.time_step;
   }

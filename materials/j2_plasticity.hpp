@@ -115,9 +115,26 @@ struct J2Result {
   int n_iterations = 0;           // Newton/bisection iterations of the return
 };
 
+// The coefficients of an update that depend only on the temperature and the
+// committed state: E, ν as K, G; σ_y(ε̄_p,n, T); η(T). A caller that updates one
+// point many times at one temperature from one committed state (the Newton
+// iterations of a step) evaluates them once; the update is then the same to the bit.
+// η is evaluated only for a rate-dependent update (time_step > 0).
+struct J2Coefficients {
+  ElasticModuli moduli;
+  FlowStress initial;       // yield stress and hardening at the committed ε̄_p
+  PropertyValue viscosity;  // η(T), Pa·s
+};
+J2Coefficients j2_coefficients(const Material& material, const J2State& committed, double temperature,
+                               double time_step);
+
 // One stress update from the committed state. Throws std::invalid_argument for
 // non-finite input.
 J2Result j2_update(const Material& material, const J2State& committed, const J2Input& input);
+// The same with coefficients from j2_coefficients(material, committed, input.temperature,
+// input.time_step).
+J2Result j2_update(const Material& material, const J2State& committed, const J2Input& input,
+                   const J2Coefficients& coefficients);
 
 // J2Input with the thermal strain of `material` between the stress-free temperature
 // and `temperature`.

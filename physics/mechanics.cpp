@@ -165,6 +165,7 @@ struct Mechanics::Impl {
     point_cache.assign(n_points, PointCache{});
     geometry_stamp.assign(mesh.n_cells(), 0);
     temperature_stamp.assign(mesh.n_cells(), 0);
+    coefficient_stamp.assign(mesh.n_cells(), 0);
     cv.reinit(mesh, 0);
     for (int q = 0; q < n_q; ++q) shape.push_back({cv.N(q, 0), cv.N(q, 1), cv.N(q, 2), cv.N(q, 3)});
     strain.assign(n_points, Vector4::Zero());
@@ -193,16 +194,21 @@ struct Mechanics::Impl {
     Matrix48 B_bar;
     double JxW = 0;
     double temperature = 0, thermal_strain = 0, thermal_strain_slope = 0;
+    materials::J2Coefficients coefficients;  // at this temperature, committed state, time step
   };
   std::vector<PointCache> point_cache;                // per cell * n_q
   std::vector<int> geometry_stamp, temperature_stamp;  // per cell: the generation cached
   int geometry_generation = 1, temperature_generation = 1;
+  // J2 coefficients: recomputed after a new temperature, a commit or a new time step.
+  std::vector<int> coefficient_stamp;
+  int coefficient_generation = 1;
   std::vector<std::array<double, 4>> shape;            // N_a at the Gauss points
   bool need_matrix = true;                             // evaluate(): tangent wanted
 
   void set_temperature(const Eigen::VectorXd& nodal_temperature) {
     temperature = nodal_temperature;
     ++temperature_generation;
+    ++coefficient_generation;
   }
 
   void refresh_cell(int e) {
@@ -257,6 +263,13 @@ struct Mechanics::Impl {
       }
       temperature_stamp[e] = temperature_generation;
     }
+    if (coefficient_stamp[e] != coefficient_generation) {
+      const materials::Material& mat = *cell_material[e];
+      for (int q = 0; q < n_q; ++q)
+        point_cache[k0 + q].coefficients =
+            materials::j2_coefficients(mat, state[k0 + q], point_cache[k0 + q].temperature, time_step);
+      coefficient_stamp[e] = coefficient_generation;
+    }
   }
 
   void cell_kernel(int e, fem::LocalSystem& local) {
@@ -292,7 +305,7 @@ struct Mechanics::Impl {
       in.thermal_strain_slope = pc.thermal_strain_slope;
       in.temperature = pc.temperature;
       in.time_step = time_step;
-      const auto result = materials::j2_update(mat, state[k], in);
+      const auto result = materials::j2_update(mat, state[k], in, pc.coefficients);
       trial_strain[k] = eps;
       trial_state[k] = result.state;
       trial_stress[k] = result.stress;
@@ -737,7 +750,10 @@ MechanicsStepReport Mechanics::solve_displacement_step(double w, const Eigen::Ve
 
 void Mechanics::set_predictor(double scale) { impl_->predictor_scale = scale; }
 
-void Mechanics::set_time_step(double seconds) { impl_->time_step = seconds; }
+void Mechanics::set_time_step(double seconds) {
+  if (seconds != impl_->time_step) ++impl_->coefficient_generation;
+  impl_->time_step = seconds;
+}
 
 void Mechanics::commit() {
   Impl& m = *impl_;
@@ -751,6 +767,7 @@ void Mechanics::commit() {
   for (int n = 0; n < m.mesh.n_nodes(); ++n)
     m.current.nodes[n] += Eigen::Vector2d(m.increment[2 * n], m.increment[2 * n + 1]);
   ++m.geometry_generation;
+  ++m.coefficient_generation;
   w_ += m.increment[m.w_dof];
   m.increment.setZero();
   positions_ = m.current.nodes;

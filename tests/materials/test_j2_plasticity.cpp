@@ -6,7 +6,8 @@
 // closed form for linear hardening and against the flow curve, no stress from free
 // thermal expansion, and the viscous overstress (Perzyna, exponent 1): the closed-form
 // return of one step, the relaxation of a held strain at the rate 3G/eta, and the
-// tangent and temperature derivative with the overstress on.
+// tangent and temperature derivative with the overstress on; coefficients evaluated once
+// per temperature and committed state give the same update to the bit.
 #include "materials/j2_plasticity.hpp"
 #include "materials/material_library.hpp"
 
@@ -476,6 +477,34 @@ TEST(J2, ViscousTangentAndTemperatureSlopeMatchFiniteDifferences) {
     EXPECT_LT(relative_error(slope, r.stress_temperature_derivative), 1e-6)
         << "analytic " << r.stress_temperature_derivative.transpose() << "\nfinite difference "
         << slope.transpose();
+  }
+}
+
+// A caller that updates one point many times at one temperature and committed state
+// (the Newton iterations of a mechanics step) evaluates the coefficients once; the
+// update must not change by a bit, elastic or plastic, rate-independent or viscous.
+TEST(J2, PrecomputedCoefficientsGiveTheSameUpdateToTheBit) {
+  const Material steel = dp1200();
+  const MandelVector uniaxial_like = to_mandel(-0.5, 1.0, -0.5, 0.0);
+  for (double dt : {0.0, 1e-3}) {
+    for (double temperature : {20.0, 650.0, 1150.0, 1490.0}) {
+      SCOPED_TRACE("dt " + std::to_string(dt) + " s, " + std::to_string(temperature) + " degC");
+      J2Input first = input_at(steel, 0.01 * uniaxial_like, temperature);
+      first.time_step = dt;
+      const J2State committed = j2_update(steel, J2State{}, first).state;
+      const J2Coefficients coefficients = j2_coefficients(steel, committed, temperature, dt);
+      for (double scale : {1e-5, 0.012, 0.02}) {
+        J2Input input = input_at(steel, scale * uniaxial_like + to_mandel(1e-3, 0, 0, 1e-3), temperature);
+        input.time_step = dt;
+        const J2Result plain = j2_update(steel, committed, input);
+        const J2Result cached = j2_update(steel, committed, input, coefficients);
+        EXPECT_EQ(plain.yielded, cached.yielded);
+        EXPECT_TRUE(plain.stress == cached.stress);
+        EXPECT_TRUE(plain.tangent == cached.tangent);
+        EXPECT_TRUE(plain.stress_temperature_derivative == cached.stress_temperature_derivative);
+        EXPECT_EQ(plain.state.equivalent_plastic_strain, cached.state.equivalent_plastic_strain);
+      }
+    }
   }
 }
 
