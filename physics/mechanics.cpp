@@ -663,6 +663,8 @@ struct Mechanics::Impl {
                          std::to_string(s_done) + "; residual " + std::to_string(report.residual) + " N)";
     }
     report.converged = outcome == Outcome::converged;
+    // The residual of the state the step ends in (the last evaluation is always there).
+    if (!report.converged && outcome != Outcome::failed) report.residual = R.lpNorm<Eigen::Infinity>();
     if (outcome == Outcome::out_of_iterations)
       report.message = "Newton did not converge in " + std::to_string(settings.max_iterations) +
                        " iterations (residual " + std::to_string(report.residual) + " N)";

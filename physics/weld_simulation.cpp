@@ -550,7 +550,13 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
     // The mechanics follows the temperature and force changes of the step; where
     // Newton fails (the first melting makes the material collapse within a step) the
     // failed part is halved, down to 1/32 of the step, with linearly interpolated
-    // temperature and force. Steps that converge are never subdivided.
+    // temperature and force. Steps that converge are never subdivided. A 1/32 sub-step
+    // whose Newton iteration stalls with an out-of-balance force below 10⁻⁵ of the
+    // load (100× the tolerance; measured: 0.004–0.012 N at 3 kN, contact points at the
+    // E/S face whose projection switches between master segments) is accepted with a
+    // warning instead of failing the run.
+    double loose_residual = 0;
+    std::string loose_message;
     {
       const Eigen::VectorXd T_start = thermal.committed_temperature();
       const double F_start = problem.schedule.force.at(times[k - 1]), F_end = problem.schedule.force.at(t);
@@ -566,7 +572,18 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
           last_mechanics_step = length;
           return true;
         }
-        if (depth == 5) return false;
+        if (depth == 5) {
+          const double load = std::max(std::abs(F_start + s1 * (F_end - F_start)), 1e3);
+          if (report.residual > 1e-5 * load) return false;
+          mech.commit();
+          last_mechanics_step = length;
+          ++result.n_mechanics_loose;
+          if (report.residual > loose_residual) {
+            loose_residual = report.residual;
+            loose_message = report.message;
+          }
+          return true;
+        }
         ++result.n_mechanics_substepped;
         const double mid = 0.5 * (s0 + s1);
         return advance(s0, mid, depth + 1) && advance(mid, s1, depth + 1);
@@ -574,6 +591,10 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
       if (!advance(0.0, 1.0, 0))
         return fail("weld stage, step " + std::to_string(k) + " (t = " + std::to_string(t * 1e3) +
                     " ms), mechanics (also in sub-steps of 1/32 step): " + report.message);
+      if (loose_residual > 0)
+        result.warnings.push_back("weld stage, step " + std::to_string(k) + " (t = " + std::to_string(t * 1e3) +
+                                  " ms): mechanics sub-step accepted with an out-of-balance force of " +
+                                  std::to_string(loose_residual) + " N (" + loose_message + ")");
     }
     thermal.commit();
 
@@ -688,6 +709,7 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
     j["newton_iterations"] = result.n_newton_iterations;
     j["coupling_iterations"] = result.n_coupling_iterations;
     j["mechanics_substep_splits"] = result.n_mechanics_substepped;
+    j["mechanics_loose_substeps"] = result.n_mechanics_loose;
     j["coupling_retries"] = result.n_coupling_retries;
     for (const auto& [name, value] : result.nugget) j["nugget"][name] = value;
     for (const auto& [name, value] : result.energy) j["energy_J"][name] = value;

@@ -57,6 +57,7 @@ struct RunResult {
   int n_newton_iterations = 0;
   int n_coupling_iterations = 0;    // electro-thermal iterations, summed over steps
   int n_mechanics_substepped = 0;   // mechanics retries with sub-steps (see run_weld)
+  int n_mechanics_loose = 0;        // smallest sub-steps accepted at a stalled residual (see run_weld)
   int n_coupling_retries = 0;       // electro-thermal solves retried (other depth, damping; see run_weld)
   // Final nugget geometry (d_n_liq, h_n_liq, d_n_sol, h_n_sol, penetration_<sheet>,
   // w_elec, d_indent, t_unmolt; m or fractions) and the energy balance (electrical,
