@@ -151,8 +151,10 @@ std::vector<char> encode_result(const RunRecord& record) {
   w.put<double>(record.wall_time);
   w.put<std::uint32_t>(static_cast<std::uint32_t>(record.features.size()));
   w.put<std::uint32_t>(static_cast<std::uint32_t>(record.failure_reason.size()));
+  w.put<std::uint32_t>(static_cast<std::uint32_t>(record.warnings.size()));
   w.put_doubles(record.features);
   w.put_text(record.failure_reason);
+  w.put_text(record.warnings);
   return w.bytes();
 }
 
@@ -164,8 +166,10 @@ RunRecord decode_result(const char* data, std::size_t size) {
   record.wall_time = r.get<double>();
   const auto n = r.get<std::uint32_t>();
   const auto reason_length = r.get<std::uint32_t>();
+  const auto warnings_length = r.get<std::uint32_t>();
   record.features = r.get_doubles(n);
   record.failure_reason = r.get_text(reason_length);
+  record.warnings = r.get_text(warnings_length);
   return record;
 }
 
@@ -255,6 +259,7 @@ void close_descriptors_of(const fs::path& file) {
       if (result.ok()) {
         record.ok = true;
         record.features = result.features();
+        record.warnings = result.warnings();
         if (static_cast<std::size_t>(record.features.size()) != n_features) {
           record.ok = false;
           record.failure_reason = "the model returned " + std::to_string(record.features.size()) +
@@ -282,7 +287,10 @@ void close_descriptors_of(const fs::path& file) {
       record.ok = false;
       record.failure_reason = "the model threw an unknown exception";
     }
-    if (!record.ok) record.features = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(n_features), not_a_number);
+    if (!record.ok) {
+      record.features = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(n_features), not_a_number);
+      record.warnings.clear();
+    }
     record.wall_time = seconds_since(start);
     // _exit() skips the stdio buffers: pass on what the model printed now.
     std::cout.flush();
@@ -584,6 +592,12 @@ std::string failure_reason_path(std::size_t index) {
   return name.str();
 }
 
+std::string warnings_path(std::size_t index) {
+  std::ostringstream name;
+  name << "/runs/warnings/run_" << std::setw(6) << std::setfill('0') << index;
+  return name.str();
+}
+
 const char* prior_kind_name(PriorKind kind) {
   switch (kind) {
     case PriorKind::uniform:
@@ -715,6 +729,10 @@ class ResultsFile {
   // two leaves an uncommitted point, evaluated again on resume.
   void append(const RunRecord& record) {
     if (!record.ok) file_->write_string(failure_reason_path(record.index), record.failure_reason);
+    if (record.ok && !record.warnings.empty()) {
+      if (!file_->exists("/runs/warnings")) file_->create_group("/runs/warnings");  // files of older versions
+      file_->write_string(warnings_path(record.index), record.warnings);
+    }
     std::vector<double> row(n_record_head_columns);
     row[column_committed] = 1;
     row[column_index] = static_cast<double>(record.index);
@@ -732,8 +750,9 @@ class ResultsFile {
     const std::size_t n = records_.n_points();
     std::vector<int> status(n), rank(n);
     std::vector<double> wall_time(n);
-    Json reasons = Json::object();
+    Json reasons = Json::object(), warnings = Json::object();
     for (std::size_t i = 0; i < n; ++i) {
+      if (!records_.warnings[i].empty()) warnings[std::to_string(i)] = records_.warnings[i];
       status[i] = static_cast<int>(records_.status[i]);
       rank[i] = records_.rank[i];
       wall_time[i] = records_.wall_time[static_cast<Eigen::Index>(i)];
@@ -746,6 +765,7 @@ class ResultsFile {
     file_->write("/results/wall_time", wall_time);
     file_->write("/results/features", to_row_major(records_.features));
     file_->write_string("/results/failure_reasons", reasons.dump(1));
+    file_->write_string("/results/warnings", warnings.dump(1));
     file_->set_attribute("/results", "n_ok", static_cast<double>(records_.count(StudyResults::Status::ok)));
     file_->set_attribute("/results", "n_failed",
                          static_cast<double>(records_.count(StudyResults::Status::failed)));
@@ -780,6 +800,7 @@ class ResultsFile {
     for (const auto& name : design_.feature_names) columns.push_back("y:" + name);
     f.set_attribute("/runs/records", "columns", columns.dump());
     f.create_group("/runs/failure_reasons");
+    f.create_group("/runs/warnings");
     f.flush();
   }
 
@@ -800,6 +821,7 @@ class ResultsFile {
     results.features = Eigen::MatrixXd::Constant(n, p, not_a_number);
     results.wall_time = Eigen::VectorXd::Constant(n, not_a_number);
     results.failure_reasons.assign(static_cast<std::size_t>(n), "");
+    results.warnings.assign(static_cast<std::size_t>(n), "");
     results.rank.assign(static_cast<std::size_t>(n), -1);
     results.task = task;
     return results;
@@ -811,6 +833,7 @@ class ResultsFile {
     records_.features.row(i) = record.features.transpose();
     records_.wall_time[i] = record.wall_time;
     records_.failure_reasons[record.index] = record.ok ? "" : record.failure_reason;
+    records_.warnings[record.index] = record.ok ? record.warnings : "";
     records_.rank[record.index] = record.rank;
   }
 
@@ -1043,6 +1066,7 @@ StudyResults read_study_results(const fs::path& file) {
                                                not_a_number);
   results.wall_time = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(n), not_a_number);
   results.failure_reasons.assign(n, "");
+  results.warnings.assign(n, "");
   results.rank.assign(n, -1);
 
   const std::vector<std::size_t> shape = h5.shape("/runs/records");
@@ -1069,6 +1093,8 @@ StudyResults read_study_results(const fs::path& file) {
     if (!ok) {
       const std::string path = failure_reason_path(i);
       results.failure_reasons[i] = h5.exists(path) ? h5.read_string(path) : "(reason not recorded)";
+    } else if (const std::string path = warnings_path(i); h5.exists(path)) {
+      results.warnings[i] = h5.read_string(path);
     }
   }
   return results;
@@ -1390,6 +1416,7 @@ MergeSummary merge_study_files(const StudyDesign& design, const fs::path& study_
       record.theta = design.points.row(static_cast<Eigen::Index>(i)).transpose();
       record.features = part.features.row(static_cast<Eigen::Index>(i)).transpose();
       record.failure_reason = part.failure_reasons[i];
+      record.warnings = part.warnings[i];
       record.wall_time = part.wall_time[static_cast<Eigen::Index>(i)];
       record.rank = part.rank[i];
       if (file.is_done(i)) {

@@ -26,6 +26,7 @@
 //   /runs/records             appendable, one row per finished run, in finishing order:
 //                             [committed, index, ok, wall_time, rank, θ..., y...]
 //   /runs/failure_reasons/run_<index>   the reason of each failed run
+//   /runs/warnings/run_<index>          the warnings of an ok run that has any
 //   /results/status, /results/features, /results/wall_time   the same, by point index
 // A row is appended and flushed as soon as its run finishes, so a killed study loses
 // only the runs that were in flight. `resume` reads the rows back, checks that the
@@ -108,6 +109,7 @@ struct RunRecord {
   Eigen::VectorXd theta;           // physical θ
   Eigen::VectorXd features;        // y (size n_features; NaN when !ok, or undefined when ok)
   std::string failure_reason;      // empty when ok
+  std::string warnings;            // of an ok run (EvaluationResult::warnings), empty if none
   double wall_time = 0;            // [s] of the evaluation in its worker
   int rank = 0;                    // MPI rank that evaluated it (0 without MPI)
 };
@@ -195,6 +197,7 @@ struct StudyResults {
                                        // ok row: a feature that run leaves undefined
   Eigen::VectorXd wall_time;           // [s], NaN unless run
   std::vector<std::string> failure_reasons;  // per point, empty unless failed
+  std::vector<std::string> warnings;         // per point, empty unless an ok run warned
   std::vector<int> rank;               // per point, −1 unless run
   TaskPartition task;                  // the partition the file was written for
 

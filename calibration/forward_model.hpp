@@ -29,10 +29,13 @@ namespace rsw::calibration {
 
 class EvaluationResult {
  public:
-  static EvaluationResult success(Eigen::VectorXd feature_values) {
+  // `warnings`: what a successful run wants its user to know (empty: nothing), e.g. a
+  // weld whose electrode passed its solidus; studies record it beside the run.
+  static EvaluationResult success(Eigen::VectorXd feature_values, std::string warnings = {}) {
     EvaluationResult result;
     result.ok_ = true;
     result.features_ = std::move(feature_values);
+    result.warnings_ = std::move(warnings);
     return result;
   }
   static EvaluationResult failure(std::string reason) {
@@ -55,12 +58,15 @@ class EvaluationResult {
 
   // Why the evaluation failed; empty for ok() results.
   const std::string& failure_reason() const { return failure_reason_; }
+  // Warnings of an ok() result; empty if none.
+  const std::string& warnings() const { return warnings_; }
 
  private:
   EvaluationResult() = default;
   bool ok_ = false;
   Eigen::VectorXd features_;
   std::string failure_reason_;
+  std::string warnings_;
 };
 
 // What simulate_signals() did: nothing (the model has no signals), wrote a signal file,

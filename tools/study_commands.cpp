@@ -107,7 +107,7 @@ std::vector<fs::path> write_run_tables(const cal::Study& study, const cal::Study
     const std::string unit = cal::describe_feature(name).unit;
     csv << "," << csv_text(unit.empty() ? name : name + " [" + unit + "]");
   }
-  csv << ",failure_reason,undefined_features\n";
+  csv << ",failure_reason,undefined_features,warnings\n";
   Json runs = Json::array();
   for (std::size_t i = 0; i < results.n_points(); ++i) {
     const auto ii = static_cast<Eigen::Index>(i);
@@ -128,11 +128,13 @@ std::vector<fs::path> write_run_tables(const cal::Study& study, const cal::Study
         undefined[features[k]] = undefined_feature_reason(features[k]);
       }
     }
-    csv << "," << csv_text(results.failure_reasons[i]) << "," << csv_text(undefined_names) << "\n";
+    csv << "," << csv_text(results.failure_reasons[i]) << "," << csv_text(undefined_names) << ","
+        << csv_text(results.warnings[i]) << "\n";
     Json run = {{"index", i}, {"status", status_name(results.status[i])}, {"theta", theta}, {"features", y}};
     run["wall_time"] = std::isfinite(results.wall_time[ii]) ? Json(results.wall_time[ii]) : Json(nullptr);
     if (results.status[i] == cal::StudyResults::Status::failed) run["failure_reason"] = results.failure_reasons[i];
     if (!undefined.empty()) run["undefined_features"] = undefined;
+    if (!results.warnings[i].empty()) run["warnings"] = results.warnings[i];
     if (!results.swept_parameter.empty()) {
       const int swept = results.swept_parameter[i];
       run["swept_parameter"] = swept < 0 ? Json(nullptr) : Json(names[static_cast<std::size_t>(swept)]);
@@ -156,6 +158,9 @@ void print_failures(const cal::StudyResults& results) {
     if (results.status[i] == cal::StudyResults::Status::failed) {
       std::cout << "  failed run " << i << ": " << results.failure_reasons[i] << "\n";
     }
+  }
+  for (std::size_t i = 0; i < results.n_points(); ++i) {
+    if (!results.warnings[i].empty()) std::cout << "  run " << i << " warns: " << results.warnings[i] << "\n";
   }
   for (std::size_t k = 0; k < results.feature_names.size(); ++k) {
     std::size_t n_undefined = 0;

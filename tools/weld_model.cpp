@@ -74,7 +74,9 @@ calibration::EvaluationResult WeldForwardModel::evaluate(const Eigen::VectorXd& 
     signal.add_column("temperature", "degC", column("temperature"));
     const auto features = calibration::extract_features(signal, {}, run.nugget);
     fs::remove_all(dir);
-    return calibration::EvaluationResult::success(features.select(feature_names_));
+    std::string warnings;
+    for (const auto& w : run.warnings) warnings += (warnings.empty() ? "" : "; ") + w;
+    return calibration::EvaluationResult::success(features.select(feature_names_), warnings);
   } catch (const std::exception& e) {
     if (!dir.empty()) fs::remove_all(dir);
     return calibration::EvaluationResult::failure(e.what());

@@ -3,7 +3,8 @@
 // without repeating finished runs; failures of every kind (returned, thrown, crashed,
 // hung, an infinite feature) are recorded with their reason and the study finishes; a
 // run with an undefined (NaN) feature is ok and keeps its NaN; array-job partitions
-// merge into the full study; an MPI run with two ranks equals a local run.
+// merge into the full study; an MPI run with two ranks equals a local run; warnings of
+// ok runs are recorded per run.
 // The models are the analytic ones of analytic_models.hpp.
 #include "calibration/designs.hpp"
 #include "calibration/farm.hpp"
@@ -303,6 +304,42 @@ TEST(Farm, RunWithUndefinedFeatureIsOkAndStoresNaNButInfiniteValueFails) {
     }
   }
   EXPECT_EQ(n_undefined, 6u);
+  fs::remove_all(dir);
+}
+
+// A successful run may carry warnings (the weld: an electrode past its solidus, a
+// loosely accepted mechanics sub-step): they travel from the worker processes to the
+// results file and back, only for the runs that have them; a failed run has none.
+TEST(Farm, WarningsOfOkRunsAreRecordedPerRun) {
+  const fs::path dir = fresh_dir("warnings");
+  class WarningModel : public ForwardModel {
+   public:
+    std::vector<std::string> parameter_names() const override { return {"a", "b", "c"}; }
+    std::vector<std::string> feature_names() const override { return {"y1", "y2"}; }
+    EvaluationResult evaluate(const Eigen::VectorXd& theta) const override {
+      const double a = theta[0];
+      if (a > 0.9) return EvaluationResult::failure("a above 0.9");
+      const Eigen::Vector2d y(a, theta[1]);
+      if (a > 0.5) return EvaluationResult::success(y, "a = " + std::to_string(a) + " is above 0.5");
+      return EvaluationResult::success(y);
+    }
+  };
+  const StudyDesign design = unit_design(20);
+  const WarningModel model;
+  const FarmSummary summary = EvaluationFarm(model, design, dir / "warnings.h5", quiet_options(2)).run();
+  EXPECT_EQ(summary.n_failed, 2u);
+  const StudyResults results = read_study_results(dir / "warnings.h5");
+  std::size_t n_warned = 0;
+  for (std::size_t i = 0; i < results.n_points(); ++i) {
+    const double a = results.points(static_cast<Eigen::Index>(i), 0);
+    if (a > 0.5 && a <= 0.9) {
+      EXPECT_EQ(results.warnings[i], "a = " + std::to_string(a) + " is above 0.5");
+      ++n_warned;
+    } else {
+      EXPECT_EQ(results.warnings[i], "") << "run " << i << ", a = " << a;
+    }
+  }
+  EXPECT_EQ(n_warned, 8u);
   fs::remove_all(dir);
 }
 

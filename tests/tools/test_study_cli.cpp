@@ -174,7 +174,7 @@ TEST(StudyCli, RunResumeAndSensitivityWriteTables) {
   EXPECT_NE(r.output.find("runs 40/40, 2 failed, elapsed "), std::string::npos) << r.output;
   const std::string runs = read_file(out / "small_runs.csv");
   EXPECT_EQ(runs.rfind("index,status,wall_time_s,rank,a [1],p1 [1],c [1],R_beta [ohm],dS_P [m],T_max [degC],d_n_liq [m],"
-                       "failure_reason,undefined_features\n", 0), 0u) << runs;
+                       "failure_reason,undefined_features,warnings\n", 0), 0u) << runs;
   EXPECT_TRUE(fs::exists(out / "small_runs.json"));
 
   // Without --resume an existing study is not overwritten; with it nothing is repeated.
@@ -215,7 +215,7 @@ TEST(StudyCli, RunWithUndefinedFeaturesIsOkAndTablesShowNanAndWhy) {
   EXPECT_EQ(results.count(rsw::calibration::StudyResults::Status::ok), 20u);
   const auto json = nlohmann::json::parse(read_file(out / "shape_runs.json"));
   const std::string csv = read_file(out / "shape_runs.csv");
-  EXPECT_NE(csv.find(",failure_reason,undefined_features\n"), std::string::npos) << csv;
+  EXPECT_NE(csv.find(",failure_reason,undefined_features,warnings\n"), std::string::npos) << csv;
   std::size_t n_undefined = 0;
   for (std::size_t i = 0; i < results.n_points(); ++i) {
     const auto& run = json["runs"][i];
@@ -228,13 +228,14 @@ TEST(StudyCli, RunWithUndefinedFeaturesIsOkAndTablesShowNanAndWhy) {
     ++n_undefined;
     EXPECT_EQ(run["undefined_features"]["R_beta"], "the dynamic resistance has no peak inside the trimmed weld stage");
     EXPECT_TRUE(run["features"]["dS_P"].is_number());
-    // The CSV row: status ok, nan for R_beta, the name in the last column.
+    // The CSV row: status ok, nan for R_beta, the name in the undefined_features
+    // column, no warnings in the last.
     std::istringstream lines(csv);
     std::string line;
     for (std::size_t k = 0; k <= i + 1; ++k) std::getline(lines, line);
     EXPECT_EQ(line.rfind(std::to_string(i) + ",ok,", 0), 0u) << line;
     EXPECT_NE(line.find(",nan,"), std::string::npos) << line;
-    EXPECT_EQ(line.substr(line.size() - 7), ",R_beta") << line;
+    EXPECT_EQ(line.substr(line.size() - 8), ",R_beta,") << line;
   }
   EXPECT_EQ(n_undefined, 10u);
 
