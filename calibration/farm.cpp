@@ -10,11 +10,11 @@
 #include "calibration/farm.hpp"
 
 #include "fem/hdf5_file.hpp"
+#include "fem/threads.hpp"
 
 #include <nlohmann/json.hpp>
 
 #include <Eigen/Core>
-#include <omp.h>
 
 #ifdef RSW_HAVE_MPI
 #include <mpi.h>
@@ -240,7 +240,7 @@ void close_descriptors_of(const fs::path& file) {
 [[noreturn]] void worker_main(int fd, pid_t parent, const ForwardModel& model,
                               std::size_t n_features, const std::vector<std::string>& feature_names) {
   // One simulation per process, single-threaded: the farm's parallelism is the processes.
-  omp_set_num_threads(1);
+  fem::use_threads(1);  // also for the libraries' own parallel regions (fem/threads.hpp)
   Eigen::setNbThreads(1);
   std::signal(SIGINT, SIG_IGN);   // the parent decides what an interrupt means
   std::signal(SIGTERM, SIG_DFL);

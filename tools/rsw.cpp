@@ -9,6 +9,7 @@
 // Errors in the input end the program with exit code 2 and a message naming the
 // file, line, key, value and what is allowed; other failures exit with code 1.
 #include "fem/config.hpp"
+#include "fem/threads.hpp"
 #include "tools/config_commands.hpp"
 #include "tools/calibrate_command.hpp"
 #include "tools/mesh_command.hpp"
@@ -40,9 +41,11 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 1024));
   app.parse_complete_callback([&threads]() {
     if (threads > 0)
-      omp_set_num_threads(threads);
+      rsw::fem::use_threads(threads);
     else if (!std::getenv("OMP_NUM_THREADS"))
-      omp_set_num_threads(1);
+      rsw::fem::use_threads(1);
+    else
+      rsw::fem::use_threads(omp_get_max_threads());
   });
   rsw::tools::add_mesh_command(app);
   rsw::tools::add_simulate_command(app);

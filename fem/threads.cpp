@@ -1,0 +1,22 @@
+// See threads.hpp: OpenMP thread counts for a process and for the libraries it calls.
+#include "fem/threads.hpp"
+
+#include <omp.h>
+
+#include <stdexcept>
+#include <string>
+
+namespace rsw::fem {
+
+void use_threads(int n) {
+  if (n < 1) throw std::invalid_argument("threads: " + std::to_string(n) + " is not allowed; at least 1");
+  omp_set_num_threads(n);
+  if (n == 1) {
+    omp_set_max_active_levels(0);
+  } else {
+    omp_set_max_active_levels(1);
+    omp_set_dynamic(1);
+  }
+}
+
+}  // namespace rsw::fem

@@ -1,0 +1,20 @@
+// How many OpenMP threads one process uses, for its own loops and for the libraries
+// it calls. The assembly loop (fem/assembler.cpp) runs on omp_get_max_threads()
+// threads. CHOLMOD 3 (SuiteSparse 5, Debian 12) opens its own parallel regions in the
+// supernodal factorisation with a fixed `num_threads(4)` clause, which ignores
+// omp_set_num_threads: on a 2-core machine a "one-thread" run then had four threads
+// taking turns, and a squeeze took 25-30 % longer than on one thread
+// (docs/PERFORMANCE.md). The only run-time controls OpenMP offers over such a clause
+// are the active-levels limit and dynamic adjustment (OpenMP 5.1, sections 2.6.1 and
+// 3.2.x), and use_threads sets them.
+#pragma once
+
+namespace rsw::fem {
+
+// n == 1: every parallel region, ours and the libraries', runs on the calling thread
+// (max-active-levels 0). n > 1: n threads for our loops, and dynamic adjustment on, so
+// a library's fixed thread request is cut to the cores the machine has free.
+// Throws std::invalid_argument for n < 1.
+void use_threads(int n);
+
+}  // namespace rsw::fem
