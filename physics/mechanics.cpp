@@ -166,6 +166,8 @@ struct Mechanics::Impl {
     geometry_stamp.assign(mesh.n_cells(), 0);
     temperature_stamp.assign(mesh.n_cells(), 0);
     coefficient_stamp.assign(mesh.n_cells(), 0);
+    elastic_matrix.resize(mesh.n_cells());
+    elastic_stamp.assign(mesh.n_cells(), 0);
     cv.reinit(mesh, 0);
     for (int q = 0; q < n_q; ++q) shape.push_back({cv.N(q, 0), cv.N(q, 1), cv.N(q, 2), cv.N(q, 3)});
     strain.assign(n_points, Vector4::Zero());
@@ -202,6 +204,12 @@ struct Mechanics::Impl {
   // J2 coefficients: recomputed after a new temperature, a commit or a new time step.
   std::vector<int> coefficient_stamp;
   int coefficient_generation = 1;
+  // ∫ B̄ᵀ D_el B̄ dV of a cell whose Gauss points all stayed elastic, kept until the
+  // coefficients change (new temperature, commit, time step): within a step the
+  // elastic tangent of a cell is fixed, and most cells (the electrodes, the cold
+  // sheet) stay elastic. Bit for bit what the kernel would compute.
+  std::vector<Eigen::Matrix<double, 8, 8>> elastic_matrix;
+  std::vector<int> elastic_stamp;  // the coefficient generation of elastic_matrix[e]; 0: none
   std::vector<std::array<double, 4>> shape;            // N_a at the Gauss points
   bool need_matrix = true;                             // evaluate(): tangent wanted
 
@@ -294,6 +302,8 @@ struct Mechanics::Impl {
         }
       }
 
+    std::array<Matrix4, 9> tangent;  // per Gauss point (n_q ≤ 9)
+    bool elastic = true;
     for (int q = 0; q < n_q; ++q) {
       const std::size_t k = k0 + q;
       const PointCache& pc = point_cache[k];
@@ -309,11 +319,26 @@ struct Mechanics::Impl {
       trial_strain[k] = eps;
       trial_state[k] = result.state;
       trial_stress[k] = result.stress;
-      if (need_matrix) {
-        const Matrix48 DB = result.tangent * B_bar;
-        Ke.noalias() += pc.JxW * B_bar.transpose().lazyProduct(DB);  // ∫ B̄ᵀ D B̄ dV (8x4x8: below GEMM size)
-      }
+      elastic = elastic && !result.yielded;
+      if (need_matrix) tangent[q] = result.tangent;
       Fe.noalias() -= pc.JxW * (B_bar.transpose() * result.stress);  // -∫ B̄ᵀ σ dV
+    }
+    if (need_matrix) {
+      if (elastic && elastic_stamp[e] == coefficient_generation) {
+        Ke += elastic_matrix[e];
+      } else {
+        Eigen::Matrix<double, 8, 8> Kc = Eigen::Matrix<double, 8, 8>::Zero();
+        for (int q = 0; q < n_q; ++q) {
+          const PointCache& pc = point_cache[k0 + q];
+          const Matrix48 DB = tangent[q] * pc.B_bar;
+          Kc.noalias() += pc.JxW * pc.B_bar.transpose().lazyProduct(DB);  // ∫ B̄ᵀ D B̄ dV (8x4x8: below GEMM size)
+        }
+        Ke += Kc;
+        if (elastic) {
+          elastic_matrix[e] = Kc;
+          elastic_stamp[e] = coefficient_generation;
+        }
+      }
     }
     local.matrix += Ke;
     local.vector += Fe;
