@@ -33,8 +33,8 @@
 //   M_a H'(T_a)/Δt, conduction k ∇N·∇N, convection, interface conductances;
 //   CHOLMOD, symbolic analysis reused). A backtracking line search on |R| guards the
 //   large corrections (the S-shaped enthalpy of a melting range can make full steps
-//   cycle). Corrections below `chord_threshold` reuse the step's last factorisation
-//   while they shrink fourfold per iteration. The iteration ends when a full
+//   cycle). Corrections reuse the step's last factorisation (chord steps) while
+//   they shrink fourfold per iteration and are taken whole. The iteration ends when a full
 //   correction is below `temperature_tolerance` (∞-norm). Each step starts from the
 //   linear extrapolation of the last two committed fields.
 // - Conduction, sources and boundary terms live on the current configuration (node
@@ -108,9 +108,6 @@ struct ThermalSettings {
   // Each step starts from the linear extrapolation of the last two committed fields
   // (from the committed field if false or at the first step).
   bool extrapolate = true;
-  // K: Newton corrections below this reuse the last factorisation of the step (chord
-  // steps) as long as they shrink at least fourfold per iteration.
-  double chord_threshold = 1.0;
   bool verbose = false;  // print Newton iterations to stderr (also RSW_VERBOSE=1)
 };
 
