@@ -38,6 +38,7 @@ struct CachedRun {
   bool ok = false;
   Eigen::VectorXd features;
   std::string failure_reason;
+  std::string warnings;
   double wall_time = 0.0;
 };
 
@@ -174,6 +175,7 @@ CalibrationResult Calibration::run() const {
       run.ok = stored.status[i] == StudyResults::Status::ok;
       run.features = stored.features.row(static_cast<Eigen::Index>(i)).transpose();
       run.failure_reason = stored.failure_reasons[i];
+      run.warnings = stored.warnings[i];
       run.wall_time = stored.wall_time[static_cast<Eigen::Index>(i)];
       cache.emplace(key_of(stored.points.row(static_cast<Eigen::Index>(i)).transpose()), std::move(run));
     }
@@ -207,6 +209,7 @@ CalibrationResult Calibration::run() const {
       run.ok = cached->second.ok;
       run.features = cached->second.features;
       run.failure_reason = cached->second.failure_reason;
+      run.warnings = cached->second.warnings;
       run.wall_time = cached->second.wall_time;
     }
 
@@ -244,8 +247,10 @@ CalibrationResult Calibration::run() const {
         run.ok = stored.status[m] == StudyResults::Status::ok;
         run.features = stored.features.row(static_cast<Eigen::Index>(m)).transpose();
         run.failure_reason = stored.failure_reasons[m];
+        run.warnings = stored.warnings[m];
         run.wall_time = stored.wall_time[static_cast<Eigen::Index>(m)];
-        cache.emplace(key_of(run.theta), CachedRun{run.ok, run.features, run.failure_reason, run.wall_time});
+        cache.emplace(key_of(run.theta),
+                      CachedRun{run.ok, run.features, run.failure_reason, run.warnings, run.wall_time});
       }
     }
 

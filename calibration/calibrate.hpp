@@ -83,6 +83,7 @@ struct CalibrationEvaluation {
   Eigen::VectorXd features;       // SI; all NaN if the run failed, some NaN if it left features undefined
   double log_likelihood = 0.0;    // ln L(θ); NaN unless ok
   std::string failure_reason;     // empty when ok; "feature X undefined: ..." for undefined features
+  std::string warnings;           // what the model warned of in a run that succeeded; empty if nothing
   double wall_time = 0.0;         // [s] of the run
   bool reused = false;            // found in the evaluation cache (resume)
 };

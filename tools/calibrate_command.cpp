@@ -19,6 +19,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -471,12 +472,13 @@ void write_h5(const fs::path& path, const cal::Study& study, const cal::Calibrat
   // Every run SBALC asked for, in order.
   const auto p = static_cast<Eigen::Index>(result.feature_names.size());
   Eigen::MatrixXd runs(static_cast<Eigen::Index>(result.evaluations.size()), 5 + 2 * d + p);
-  Json reasons = Json::object();
+  Json reasons = Json::object(), warnings = Json::object();
   for (std::size_t r = 0; r < result.evaluations.size(); ++r) {
     const cal::CalibrationEvaluation& e = result.evaluations[r];
     runs.row(static_cast<Eigen::Index>(r)) << static_cast<double>(e.batch), e.ok ? 1.0 : 0.0, e.reused ? 1.0 : 0.0,
         e.wall_time, e.log_likelihood, e.theta_unit.transpose(), e.theta.transpose(), e.features.transpose();
     if (!e.ok) reasons[std::to_string(r)] = e.failure_reason;
+    if (!e.warnings.empty()) warnings[std::to_string(r)] = e.warnings;
   }
   Json columns = {"batch", "ok", "reused", "wall_time", "log_likelihood"};
   for (const auto& name : result.parameter_names) columns.push_back("u:" + name);
@@ -485,6 +487,7 @@ void write_h5(const fs::path& path, const cal::Study& study, const cal::Calibrat
   h5.write("/evaluations/table", to_row_major(runs));
   h5.set_attribute("/evaluations/table", "columns", columns.dump());
   h5.write_string("/evaluations/failure_reasons", reasons.dump(1));
+  h5.write_string("/evaluations/warnings", warnings.dump(1));  // by row, runs that warned
 
   // Posterior-predictive runs.
   Eigen::MatrixXd predictive_points(static_cast<Eigen::Index>(predictive.size()), d);
@@ -588,6 +591,8 @@ void run_calibrate(const CalibrateOptions& options, const ForwardModelFactory& f
       {"n_evaluations", result.n_evaluations},
       {"n_reused", result.n_reused},
       {"n_failed", result.n_failed},
+      {"n_warned", std::count_if(result.evaluations.begin(), result.evaluations.end(),
+                                 [](const cal::CalibrationEvaluation& e) { return !e.warnings.empty(); })},
       {"n_iterations", result.history.size()},
       {"parameters", parameters_json(study, result)},
       {"credible_level", result.credible_level},
@@ -634,6 +639,9 @@ void run_calibrate(const CalibrateOptions& options, const ForwardModelFactory& f
               result.converged ? "converged" : "NOT converged", result.n_evaluations, result.n_reused,
               result.n_failed, result.history.size(), cal::format_duration(result.elapsed).c_str());
   std::printf("  %s\n", result.stop_reason.c_str());
+  for (std::size_t r = 0; r < result.evaluations.size(); ++r)
+    if (!result.evaluations[r].warnings.empty() && !result.evaluations[r].reused)
+      std::printf("  run %zu warns: %s\n", r, result.evaluations[r].warnings.c_str());
   std::printf("  evidence ln c = %.6g, bounds [%.6g, %.6g], ratio %.3g (noise part %.3g); log-likelihood noise "
               "tau = %.3g\n",
               result.log_evidence, result.log_evidence_lower, result.log_evidence_upper, result.ratio,

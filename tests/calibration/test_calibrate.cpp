@@ -88,6 +88,21 @@ class PartlyUndefinedLinearModel : public LinearModel {
   double p_undefined_;
 };
 
+// The linear model that succeeds with a warning for p > p_warn, as a weld whose
+// electrode reaches its solidus.
+class WarningLinearModel : public LinearModel {
+ public:
+  WarningLinearModel(Eigen::MatrixXd a, Eigen::VectorXd b, double p_warn)
+      : LinearModel(std::move(a), std::move(b)), p_warn_(p_warn) {}
+  EvaluationResult evaluate(const Eigen::VectorXd& theta) const override {
+    Eigen::VectorXd y = LinearModel::evaluate(theta).features();
+    return EvaluationResult::success(y, theta(0) > p_warn_ ? "electrode above its solidus" : "");
+  }
+
+ private:
+  double p_warn_;
+};
+
 // The linear-Gaussian problem with p ~ U[2, 6], q ~ U[−1, 1] (box volume V = 8), three
 // replicates and known σ. ℒ(θ) = ℒ(θ̂) − ½ (θ − θ̂)ᵀ P (θ − θ̂), P = N AᵀΣ⁻¹A and
 // θ̂ = P⁻¹ AᵀΣ⁻¹ Σ_k (y_k − b), so with θ̂ far inside the box
@@ -359,6 +374,32 @@ TEST(Calibrate, RunWithUndefinedLikelihoodFeatureIsAFailedRunOutsideTheGp) {
   const CalibrationResult resumed = Calibration(model, problem.design(), problem.likelihood(), options).run();
   EXPECT_EQ(resumed.n_reused, resumed.n_evaluations);
   EXPECT_EQ(resumed.n_failed, n_undefined);
+  fs::remove_all(dir);
+}
+
+TEST(Calibrate, WarningsOfOkRunsAreKeptPerEvaluationAlsoWhenResumed) {
+  const fs::path dir = fresh_dir("warnings");
+  const LinearGaussianProblem problem;
+  const WarningLinearModel model(problem.a, problem.b, 5.2);
+  CalibrationOptions options = test_options(dir / "evaluations");
+  options.sbalc.max_evaluations = 12;
+  const CalibrationResult result = Calibration(model, problem.design(), problem.likelihood(), options).run();
+  std::size_t n_warned = 0;
+  for (const CalibrationEvaluation& run : result.evaluations) {
+    EXPECT_TRUE(run.ok) << run.failure_reason;  // a warning does not fail a run
+    EXPECT_EQ(run.warnings, run.theta(0) > 5.2 ? "electrode above its solidus" : "");
+    n_warned += run.warnings.empty() ? 0 : 1;
+  }
+  EXPECT_GE(n_warned, 1u);  // the initial design has p = 5.6
+  EXPECT_EQ(result.n_failed, 0u);
+
+  options.farm.resume = true;
+  const CalibrationResult resumed = Calibration(model, problem.design(), problem.likelihood(), options).run();
+  ASSERT_EQ(resumed.evaluations.size(), result.evaluations.size());
+  for (std::size_t r = 0; r < resumed.evaluations.size(); ++r) {
+    EXPECT_TRUE(resumed.evaluations[r].reused);
+    EXPECT_EQ(resumed.evaluations[r].warnings, result.evaluations[r].warnings);
+  }
   fs::remove_all(dir);
 }
 
