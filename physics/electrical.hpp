@@ -31,7 +31,7 @@
 // powers; the current through every interface (slave to master) and out through the
 // ground face (the consistent reaction ∫ σ∇φ·∇w dV, w = 1 on the face nodes) for
 // current conservation. Discrete energy identity: V I = bulk + interface power
-// (φᵀKφ = φᵀF, to the linear tolerance 10⁻¹²), so the thermal solver receives the
+// (φᵀKφ = φᵀF, to the linear tolerance 10⁻¹⁰), so the thermal solver receives the
 // electrical power.
 //
 // Sources: paper §2.1.1; MODEL.md §3; verification problems in VERIFICATION.md
