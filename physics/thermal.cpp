@@ -23,6 +23,16 @@ using Vector4 = Eigen::Matrix<double, 4, 1>;
 bool ends_with(const std::string& s, const std::string& suffix) {
   return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
+
+// The λ_m blend weight w(T) = smoothstep(T; T_m − δ, T_m) (slope) and its integral
+// W(T) = ∫_{−∞}^T w dτ (value), K: with s = (T − T_m + δ)/δ clamped to [0, 1],
+// W = δ (s³ − s⁴/2) inside the band, 0 below it and δ/2 + (T − T_m) above.
+materials::PropertyValue melt_blend(double T, double T_m, double band) {
+  const double s = (T - (T_m - band)) / band;
+  if (s <= 0) return {0.0, 0.0};
+  if (s >= 1) return {0.5 * band + (T - T_m), 1.0};
+  return {band * s * s * s * (1 - 0.5 * s), s * s * (3 - 2 * s)};
+}
 }  // namespace
 
 ThermalSettings thermal_settings(const ThermalParameters& p) {
@@ -54,6 +64,7 @@ struct Thermal::Impl {
   std::vector<std::vector<double>> face_length;
   std::vector<std::pair<int, int>> groups;
   std::unique_ptr<fem::Assembler> assembler;
+  bool implicit_blend;  // the λ_m blend weight follows the Newton iterate (settings)
   fem::LinearSolver solver;
   fem::SparseMatrix K;
   Eigen::VectorXd F;
@@ -70,6 +81,9 @@ struct Thermal::Impl {
   Eigen::VectorXd H, dH, H_old;        // J/kg and J/(kg K), nodal
   std::vector<char> melt_state;        // per cell Gauss point: k = λ_m this step (sharp switch)
   std::vector<double> conductivity_q;  // k per cell Gauss point, at the solve's starting field
+  // The table conductivity at the solve's starting field, per cell Gauss point (the
+  // part of k that stays lagged when the λ_m blend is implicit).
+  std::vector<double> table_conductivity_q;
   bool new_step = true;
   bool start_given = false;            // set_start() before the next solve
   contact::BondingState bonding, trial_bonding;
@@ -98,7 +112,8 @@ struct Thermal::Impl {
         n_q(s.n_gauss * s.n_gauss),
         dofs(m, 1),
         constraints(dofs.n_dofs()),
-        solver(fem::SolverKind::cholmod) {
+        implicit_blend(s.melt_conductivity > 0 && s.melt_smoothing > 0 && s.implicit_melt_blend),
+        solver(implicit_blend ? fem::SolverKind::umfpack : fem::SolverKind::cholmod) {
     if (std::getenv("RSW_VERBOSE")) settings.verbose = true;
     if (s.n_gauss < 1 || s.n_gauss > 3) throw std::invalid_argument("Thermal: n_gauss must be 1, 2 or 3");
     if (static_cast<int>(body_material.size()) != mesh.n_bodies())
@@ -171,6 +186,7 @@ struct Thermal::Impl {
 
     melt_state.assign(static_cast<std::size_t>(mesh.n_cells()) * n_q, 0);
     conductivity_q.assign(melt_state.size(), 0.0);
+    table_conductivity_q.assign(melt_state.size(), 0.0);
     JxW.assign(melt_state.size(), 0.0);
     grad.assign(4 * melt_state.size(), Eigen::Vector2d::Zero());
     for (int q = 0; q < n_q; ++q) shape.push_back({cv.N(q, 0), cv.N(q, 1), cv.N(q, 2), cv.N(q, 3)});
@@ -239,6 +255,7 @@ struct Thermal::Impl {
         double Tq = 0;
         for (int a = 0; a < 4; ++a) Tq += shape[q][a] * T[c[a]];
         const double table = mat.thermal_conductivity(Tq).value;
+        table_conductivity_q[k] = table;
         if (!melt_switch_cell[e]) {
           conductivity_q[k] = table;
         } else if (settings.melt_smoothing > 0) {
@@ -282,21 +299,49 @@ struct Thermal::Impl {
       Ke(a, a) += m * dH[n] / dt;           // M_a H'(T_a)/Δt
     }
     const bool matrix = need_matrix;
+    const bool blend = implicit_blend && melt_switch_cell[e];
+    std::array<double, 4> blend_weight{}, blend_integral{};  // w(T_b), W(T_b)
+    if (blend) {
+      const double T_m = cell_material[e]->melting_temperature();
+      for (int b = 0; b < 4; ++b) {
+        const auto wb = melt_blend(Tc[b], T_m, settings.melt_smoothing);
+        blend_weight[b] = wb.slope;
+        blend_integral[b] = wb.value;
+      }
+    }
     for (int q = 0; q < n_q; ++q) {
       const std::size_t k = static_cast<std::size_t>(e) * n_q + q;
       const Eigen::Vector2d* g = &grad[4 * k];
       const std::array<double, 4>& N = shape[q];
       Eigen::Vector2d grad_T = Eigen::Vector2d::Zero();
       for (int a = 0; a < 4; ++a) grad_T += Tc[a] * g[a];
-      const double kw = conductivity_q[k] * JxW[k];
       const double qw = (joule->empty() ? 0.0 : (*joule)[k]) * JxW[k];
+      if (blend) {
+        // Conduction with the λ_m blend in nodal Kirchhoff form:
+        //   q = −k_t ∇T − (λ_m − k_t) ∇(Σ_b N_b W(T_b)),  W(T) = ∫ w dT,
+        // k_t the table conductivity at the solve's start (lagged). Its tangent,
+        // [k_t + (λ_m − k_t) w(T_b)] ∇N_b·∇N_a, scales the columns of a conduction
+        // matrix by positive nodal conductivities: bounded however steep the blend.
+        const double table = table_conductivity_q[k];
+        const double jump = settings.melt_conductivity - table;
+        Eigen::Vector2d grad_W = Eigen::Vector2d::Zero();
+        for (int b = 0; b < 4; ++b) grad_W += blend_integral[b] * g[b];
+        const Eigen::Vector2d flux = table * grad_T + jump * grad_W;
+        for (int a = 0; a < 4; ++a) {
+          Re[a] += JxW[k] * flux.dot(g[a]) - qw * N[a];
+          if (matrix)
+            for (int b = 0; b < 4; ++b) Ke(a, b) += JxW[k] * (table + jump * blend_weight[b]) * g[b].dot(g[a]);
+        }
+        continue;
+      }
+      const double kw = conductivity_q[k] * JxW[k];
       for (int a = 0; a < 4; ++a) {
         Re[a] += kw * grad_T.dot(g[a]) - qw * N[a];  // k ∇T·∇N_a − q_v N_a
         if (matrix)
           for (int b = a; b < 4; ++b) Ke(a, b) += kw * g[b].dot(g[a]);  // k ∇N_b·∇N_a
       }
     }
-    if (matrix)
+    if (matrix && !blend)
       for (int a = 0; a < 4; ++a)
         for (int b = 0; b < a; ++b) Ke(a, b) = Ke(b, a);
     local.matrix += Ke;

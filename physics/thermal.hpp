@@ -16,19 +16,33 @@
 // - k(T): the table conductivity; for the sheet bodies (name prefix "sheet_") k = λ_m
 //   at and above T_melting (paper eq. 3, λ_m = thermal.melt_conductivity), switched
 //   per Gauss point. An optional band of width δ below T_melting blends the two C¹
-//   (k = (1 − w) k_table + w λ_m, w = smoothstep(T; T_m − δ, T_m)); δ = 0 (default)
-//   is the paper's switch. The sharp switch states are set once per step, at the
+//   (k = (1 − w) k_table + w λ_m, w = smoothstep(T; T_m − δ, T_m); in nodal
+//   Kirchhoff form, below); δ = 0 (the settings' default) is the paper's switch. The sharp switch states are set once per step, at the
 //   step's predicted field (our choice): a state that flipped between the iterations
 //   of one step could keep a Gauss point near T_melting cycling between λ_m and the
 //   table, and no iteration would settle.
-// - Coefficients (our choice): each solve evaluates k(T) at the cell Gauss points
-//   and the interface conductances h at the field it starts from; within the solve
-//   only the enthalpy is nonlinear. Like σ(T) of the electrical field, k and h are
-//   brought up to date by the staggered coupling iterations of a step (a fixed point
-//   of those iterations is the fully implicit solution). Implicit k(T) and h(T_i)
-//   made Newton stall on the weld: h falls steeply near the solidus, where σ_d drops
-//   to the strength floor, and the kinks of the piecewise-linear k and σ_d tables
-//   trap the iterates; the flux stays conservative either way.
+// - Coefficients (our choice): each solve evaluates the table k(T) at the cell
+//   Gauss points and the interface conductances h at the field it starts from. Like
+//   σ(T) of the electrical field, they are brought up to date by the staggered
+//   coupling iterations of a step (a fixed point of those iterations is the fully
+//   implicit solution). Implicit table k(T) and h(T_i) made Newton stall on the
+//   weld: h falls steeply near the solidus, where σ_d drops to the strength floor,
+//   and the kinks of the piecewise-linear k and σ_d tables trap the iterates; the
+//   flux stays conservative either way.
+// - The λ_m blend (band δ > 0) is implicit, in nodal Kirchhoff form: in a sheet cell
+//   the flux is −k_t ∇T − (λ_m − k_t) ∇(Σ_b N_b W(T_b)), W(T) = ∫ w dT the integral
+//   of the blend weight, k_t the table value at the solve's start. Its tangent
+//   [k_t + (λ_m − k_t) w(T_b)] ∇N_b·∇N_a is unsymmetric (UMFPACK) but bounded. A
+//   lagged blend made the coupling map steeply decreasing where a thin layer melts
+//   (k rising sixfold within 20 K: a layer computed with the table k overheats, with
+//   λ_m it falls below the band), and the coupling cycled by hundreds of kelvin
+//   (design point 44 of the Table I study, 4 ms: 60 iterations at six retries without
+//   convergence; now 5). A Gauss-point blend k(T_q) with its tangent term
+//   k'(T_q) N_b ∇T·∇N_a was tried first: that term dwarfs the conduction where the
+//   band meets a steep gradient, and Newton took steps of 10⁴ K and stalled on the
+//   default weld at 16 ms. For a cell whose nodes lie on one side of the band the
+//   two forms agree; across it the Kirchhoff form conducts with the mean of k over
+//   the nodal temperature range (exact for steady 1-D conduction).
 // - Newton: the tangent is exact for the solve's problem and symmetric (capacity
 //   M_a H'(T_a)/Δt, conduction k ∇N·∇N, convection, interface conductances;
 //   CHOLMOD, symbolic analysis reused). A backtracking line search on |R| guards the
@@ -100,6 +114,10 @@ struct ThermalSettings {
   double melt_conductivity = 0.0;     // W/(m·K), λ_m; <= 0 keeps the tables everywhere
   std::string melt_conductivity_prefix = "sheet_";  // bodies whose k switches to λ_m
   double melt_smoothing = 0.0;        // K, blend band below T_melting (0: sharp switch)
+  // With a blend band: the blend is implicit in nodal Kirchhoff form (above; the
+  // table part of k stays at the solve's starting field) and the tangent unsymmetric
+  // (UMFPACK instead of CHOLMOD). false: the blend at the solve's starting field too.
+  bool implicit_melt_blend = true;
   int max_iterations = 40;
   // K, ∞-norm of a full Newton correction that ends the iteration: the field is then
   // within ~10⁻⁵ K of the solve's discrete solution (chord steps contract fourfold at

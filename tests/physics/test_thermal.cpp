@@ -16,6 +16,7 @@
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -513,6 +514,61 @@ TEST(ThermalVerification, MeltConductivityReplacesTableAboveMeltingTemperature) 
     }
     std::printf("melt conductivity, body %-9s: top %.4f degC, closed form with k = %.1f: %.4f degC, max error %.1e K\n",
                 body.c_str(), thermal.temperature().maxCoeff(), k, T_b + q * L * L / (2 * k), worst);
+    EXPECT_LT(worst, 1e-6);
+  }
+}
+
+// The λ_m blend is solved implicitly, in nodal Kirchhoff form: a column of a "sheet_"
+// body held at 1460 °C at its foot and 1540 °C at its top, k = 30 W/(m·K) below the
+// band [1480, 1500] °C and λ_m = 100 above it. At steady state the Kirchhoff variable
+// U(T) = ∫ k dT is linear in z, and a conduction-only 1-D problem is nodally exact in
+// U, so T(z) = U⁻¹(U(T_b) + (U(T_t) − U(T_b)) z/L). U is integrated here numerically
+// (Simpson) from the smoothstep blend. One solve (dt = 10⁸ s, steady) must reach it from a start
+// below the band and from one above it: the blend follows the iterate, so the solve
+// does not depend on the field it starts from (a blend lagged at the start field gives
+// the linear profile of k = 30 from below).
+TEST(ThermalVerification, MeltBlendIsImplicitAndNodallyExactInKirchhoffForm) {
+  MaterialSpec spec;
+  spec.conductivity = PropertyTable::constant(30.0);
+  spec.solidus = 1450;
+  spec.liquidus = 1490;
+  spec.melting_temperature = 1500;
+  spec.latent_heat = 2.7e5;
+  const auto metal = make_material(spec);
+  const double L = 1e-3, T_b = 1460, T_t = 1540, lambda_m = 100, band = 20;
+  auto k = [&](double tau) {
+    const double x = std::clamp((tau - (spec.melting_temperature - band)) / band, 0.0, 1.0);
+    return 30.0 + x * x * (3 - 2 * x) * (lambda_m - 30.0);
+  };
+  auto U = [&](double T) {  // ∫_{T_b}^{T} k dτ, composite Simpson on 2000 intervals
+    const int n = 2000;
+    const double h = (T - T_b) / n;
+    double sum = k(T_b) + k(T);
+    for (int i = 1; i < n; ++i) sum += (i % 2 ? 4 : 2) * k(T_b + i * h);
+    return sum * h / 3;
+  };
+  const double U_t = U(T_t);
+  const std::vector<contact::InterfacePairing> none;
+  const contact::ContactState contact{&none, {}};
+  const fem::Mesh mesh = test::block_mesh("sheet_1", 0, 0.2e-3, 0, L, 0.05e-3);
+  for (const double start : {1400.0, 1600.0}) {
+    physics::ThermalSettings ts = insulated(start);
+    ts.fixed_temperatures = {{"sheet_1.bottom", T_b}, {"sheet_1.top", T_t}};
+    ts.melt_conductivity = lambda_m;
+    ts.melt_smoothing = band;
+    ts.temperature_tolerance = 1e-9;
+    physics::Thermal thermal(mesh, {&metal}, {}, ts);
+    const auto report = thermal.solve(1e8, mesh.nodes, contact, {}, {});
+    ASSERT_TRUE(report.converged) << report.message;
+    double worst = 0;
+    for (int n = 0; n < mesh.n_nodes(); ++n) {
+      const double target = U_t * mesh.nodes[n].y() / L;
+      double lo = T_b, hi = T_t;  // bisection on the increasing U
+      for (int it = 0; it < 60; ++it) (U(0.5 * (lo + hi)) < target ? lo : hi) = 0.5 * (lo + hi);
+      worst = std::max(worst, std::abs(thermal.temperature()[n] - 0.5 * (lo + hi)));
+    }
+    std::printf("implicit lambda_m blend, start %.0f degC: %d Newton iterations, max nodal error %.1e K\n", start,
+                report.iterations, worst);
     EXPECT_LT(worst, 1e-6);
   }
 }
