@@ -68,57 +68,63 @@ const InterfaceProperties& InterfaceModel::at(const std::string& name) const {
 }
 
 namespace {
-// The softer side's yield stress σ_y(0, T) and its temperature slope.
-materials::PropertyValue softer_yield_stress(const materials::Material& a, const materials::Material& b, double T) {
-  const materials::FlowStress ya = a.yield_stress(0.0, T);
-  const materials::FlowStress yb = b.yield_stress(0.0, T);
-  const materials::FlowStress& y = ya.yield_stress <= yb.yield_stress ? ya : yb;
-  return {y.yield_stress, y.temperature_slope};
+// The softer side's yield stress σ_y(0, T) at each side's own temperature, and its
+// slopes with respect to T_a and T_b (one of them is zero).
+struct Softer {
+  double value = 0, d_a = 0, d_b = 0;
+};
+Softer softer_yield_stress(const materials::Material& a, double T_a, const materials::Material& b, double T_b) {
+  const materials::FlowStress ya = a.yield_stress(0.0, T_a);
+  const materials::FlowStress yb = b.yield_stress(0.0, T_b);
+  if (ya.yield_stress <= yb.yield_stress) return {ya.yield_stress, ya.temperature_slope, 0.0};
+  return {yb.yield_stress, 0.0, yb.temperature_slope};
 }
 }  // namespace
 
 Conductance electrical_contact_conductance(const materials::Material& a, const materials::Material& b,
-                                           double normal_stress, double interface_temperature,
+                                           double normal_stress, double temperature_a, double temperature_b,
                                            const InterfaceProperties& properties) {
-  const materials::PropertyValue soft = softer_yield_stress(a, b, interface_temperature);
-  const materials::PropertyValue ra = a.electrical_resistivity(interface_temperature);
-  const materials::PropertyValue rb = b.electrical_resistivity(interface_temperature);
+  const Softer soft = softer_yield_stress(a, temperature_a, b, temperature_b);
+  const materials::PropertyValue ra = a.electrical_resistivity(temperature_a);
+  const materials::PropertyValue rb = b.electrical_resistivity(temperature_b);
   const double mean_rho = 0.5 * (ra.value + rb.value);
   const auto law = bay_wanheim_conductance(normal_stress, soft.value, mean_rho, properties.coating_resistivity,
                                            properties.film_thickness);
-  return {law.conductance, law.d_normal_stress,
-          law.d_flow_stress * soft.slope + law.d_resistivity * 0.5 * (ra.slope + rb.slope)};
+  return {law.conductance, law.d_normal_stress, law.d_flow_stress * soft.d_a + law.d_resistivity * 0.5 * ra.slope,
+          law.d_flow_stress * soft.d_b + law.d_resistivity * 0.5 * rb.slope};
 }
 
 Conductance thermal_contact_conductance(const materials::Material& a, const materials::Material& b,
-                                        double normal_stress, double interface_temperature,
+                                        double normal_stress, double temperature_a, double temperature_b,
                                         const InterfaceProperties& properties,
                                         const ThermalContactConstants& constants) {
-  const materials::PropertyValue soft = softer_yield_stress(a, b, interface_temperature);
-  const materials::PropertyValue ka = a.thermal_conductivity(interface_temperature);
-  const materials::PropertyValue kb = b.thermal_conductivity(interface_temperature);
+  const Softer soft = softer_yield_stress(a, temperature_a, b, temperature_b);
+  const materials::PropertyValue ka = a.thermal_conductivity(temperature_a);
+  const materials::PropertyValue kb = b.thermal_conductivity(temperature_b);
   const auto law =
       simufact_conductance(normal_stress, soft.value, 0.5 * (ka.value + kb.value), properties.htc_p1, constants);
-  return {law.conductance, law.d_normal_stress,
-          law.d_yield_stress * soft.slope + law.d_conductivity * 0.5 * (ka.slope + kb.slope)};
+  return {law.conductance, law.d_normal_stress, law.d_yield_stress * soft.d_a + law.d_conductivity * 0.5 * ka.slope,
+          law.d_yield_stress * soft.d_b + law.d_conductivity * 0.5 * kb.slope};
 }
 
 Conductance bonded_electrical_conductance(const materials::Material& a, const materials::Material& b,
-                                          double interface_temperature, double local_size, double factor) {
-  const materials::PropertyValue ra = a.electrical_resistivity(interface_temperature);
-  const materials::PropertyValue rb = b.electrical_resistivity(interface_temperature);
+                                          double temperature_a, double temperature_b, double local_size,
+                                          double factor) {
+  const materials::PropertyValue ra = a.electrical_resistivity(temperature_a);
+  const materials::PropertyValue rb = b.electrical_resistivity(temperature_b);
   // σ = 1/ρ_e, dσ/dT = −ρ_e'/ρ_e²
   const double sa = 1 / ra.value, sb = 1 / rb.value;
   const double dsa = -ra.slope * sa * sa, dsb = -rb.slope * sb * sb;
-  return {bonded_conductance(sa, sb, local_size, factor), 0.0, bonded_conductance(dsa, dsb, local_size, factor)};
+  return {bonded_conductance(sa, sb, local_size, factor), 0.0, bonded_conductance(dsa, 0.0, local_size, factor),
+          bonded_conductance(0.0, dsb, local_size, factor)};
 }
 
 Conductance bonded_thermal_conductance(const materials::Material& a, const materials::Material& b,
-                                       double interface_temperature, double local_size, double factor) {
-  const materials::PropertyValue ka = a.thermal_conductivity(interface_temperature);
-  const materials::PropertyValue kb = b.thermal_conductivity(interface_temperature);
+                                       double temperature_a, double temperature_b, double local_size, double factor) {
+  const materials::PropertyValue ka = a.thermal_conductivity(temperature_a);
+  const materials::PropertyValue kb = b.thermal_conductivity(temperature_b);
   return {bonded_conductance(ka.value, kb.value, local_size, factor), 0.0,
-          bonded_conductance(ka.slope, kb.slope, local_size, factor)};
+          bonded_conductance(ka.slope, 0.0, local_size, factor), bonded_conductance(0.0, kb.slope, local_size, factor)};
 }
 
 BondingState::BondingState(const std::vector<InterfacePairing>& pairings) {

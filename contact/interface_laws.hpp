@@ -25,15 +25,20 @@
 // Interface Joule heat: q_s = h_e (φ⁺ − φ⁻)² per unit area (W/m²), released half on
 // each side of the interface (the MOOSE/MALAMUTE convention of MODEL.md §3).
 //
-// Interface temperature (our choice, the paper is silent): the mean of the two sides'
-// temperatures at the point, T_i = (T_slave + T_master)/2; every material property
-// of eqs. 1 and 2 is evaluated at T_i, for both sides.
+// Temperatures (our choice, the paper is silent): each side's properties (ρ_i, c_i,
+// its yield stress) at that side's own temperature at the point, T_slave or
+// T_master, interpolated on its face. Where the thermal contact is good the two are
+// close and any rule agrees; where they differ, the mean (the rule until
+// 2026-11-23) gave one body's material the other's temperature — a copper face at
+// 1000 °C against steel at 1160 °C read as molten copper (its resistivity doubles
+// across the 1070–1080 °C melting range), and the lagged E/S conductances then made
+// the electro-thermal coupling cycle (docs/PERFORMANCE.md).
 //
 // Bonding (our choice, MODEL.md §3): a S/S point whose two sides have both reached
 // their solidus is bonded for good (history flag per pairing point, committed after
 // a converged step). A bonded point conducts like bulk material: electrical and
 // thermal conductance h = F · k̄ · 2/h_local, k̄ the mean of the two sides' bulk
-// conductivities (σ = 1/ρ_e, or the table k) at T_i and h_local the length of the
+// conductivities (σ = 1/ρ_e, or the table k), each at its side's temperature, and h_local the length of the
 // slave face in the undeformed mesh. 2 k̄/h_local is the conductance of a layer of
 // half a cell; the factor F (default 10³) makes the bonded interface's resistance
 // 1/(2000) of one cell's and about 10⁻⁵ of the sheet stack's, negligible, while
@@ -122,27 +127,29 @@ struct InterfaceModel {
 };
 
 // A conductance with its derivatives with respect to the normal stress and to the
-// interface temperature T_i (through the temperature-dependent properties).
+// two sides' temperatures (through the temperature-dependent properties).
 struct Conductance {
-  double value = 0;          // S/m² or W/(m²K)
-  double d_pressure = 0;     // per Pa
-  double d_temperature = 0;  // per K
+  double value = 0;            // S/m² or W/(m²K)
+  double d_pressure = 0;       // per Pa
+  double d_temperature_a = 0;  // per K, side a (the first material)
+  double d_temperature_b = 0;  // per K, side b
 };
 
-// Bay–Wanheim h_e between materials a and b at T_i and normal stress σ_n. The min()
-// choosing the softer side is only C⁰ where the two yield curves cross.
+// Bay–Wanheim h_e between material a at T_a and material b at T_b (°C), normal stress
+// σ_n. The min() choosing the softer side is only C⁰ where the two yield curves cross.
 Conductance electrical_contact_conductance(const materials::Material& a, const materials::Material& b,
-                                           double normal_stress, double interface_temperature,
+                                           double normal_stress, double temperature_a, double temperature_b,
                                            const InterfaceProperties& properties);
-// Simufact HTC between materials a and b at T_i and normal stress F_n (no closure factor).
+// Simufact HTC between material a at T_a and b at T_b, normal stress F_n (no closure factor).
 Conductance thermal_contact_conductance(const materials::Material& a, const materials::Material& b,
-                                        double normal_stress, double interface_temperature,
+                                        double normal_stress, double temperature_a, double temperature_b,
                                         const InterfaceProperties& properties, const ThermalContactConstants& constants);
-// Bonded conductances (σ = 1/ρ_e of both sides, or their table k) at T_i.
+// Bonded conductances (σ = 1/ρ_e of both sides, or their table k), each side at its
+// own temperature.
 Conductance bonded_electrical_conductance(const materials::Material& a, const materials::Material& b,
-                                          double interface_temperature, double local_size, double factor);
+                                          double temperature_a, double temperature_b, double local_size, double factor);
 Conductance bonded_thermal_conductance(const materials::Material& a, const materials::Material& b,
-                                       double interface_temperature, double local_size, double factor);
+                                       double temperature_a, double temperature_b, double local_size, double factor);
 
 // ---------------------------------------------------------------------------------
 // State shared by the electrical and thermal solvers.

@@ -192,12 +192,11 @@ struct Electrical::Impl {
     }
   }
 
-  // Interface temperature and the materials of the two sides of a pairing point.
+  // Temperatures and materials of the two sides of a pairing point.
   struct Sides {
     double slave_temperature, master_temperature;
     const materials::Material* slave;
     const materials::Material* master;
-    double interface_temperature() const { return 0.5 * (slave_temperature + master_temperature); }
   };
   Sides sides(const contact::ContactPoint& pt) const {
     const Eigen::VectorXd& T = *temperature;
@@ -224,12 +223,12 @@ struct Electrical::Impl {
         const Sides s = sides(pt);
         const bool bonded = props.bonding && bonding.bonded(static_cast<int>(p), static_cast<int>(i));
         if (bonded) {
-          out[p][i] = contact::bonded_electrical_conductance(*s.slave, *s.master, s.interface_temperature(),
+          out[p][i] = contact::bonded_electrical_conductance(*s.slave, *s.master, s.slave_temperature, s.master_temperature,
                                                              face_length[p][pt.slave_face], model.bonded_factor)
                           .value;
         } else if (contact->pressure[p][i] > 0) {
           out[p][i] = contact::electrical_contact_conductance(*s.slave, *s.master, contact->pressure[p][i],
-                                                              s.interface_temperature(), props)
+                                                              s.slave_temperature, s.master_temperature, props)
                           .value;
         }
       }

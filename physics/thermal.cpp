@@ -385,16 +385,15 @@ struct Thermal::Impl {
           continue;
         const double T_s = pt.slave_weights[0] * T[pt.slave_nodes[0]] + pt.slave_weights[1] * T[pt.slave_nodes[1]];
         const double T_m = pt.master_weights[0] * T[pt.master_nodes[0]] + pt.master_weights[1] * T[pt.master_nodes[1]];
-        const double T_i = 0.5 * (T_s + T_m);
         const materials::Material& mat_s = *node_material[pt.slave_nodes[0]];
         const materials::Material& mat_m = *node_material[pt.master_nodes[0]];
         if (props.bonding && bonding.bonded(static_cast<int>(p), static_cast<int>(i))) {
-          h = contact::bonded_thermal_conductance(mat_s, mat_m, T_i, face_length[p][pt.slave_face], model.bonded_factor)
+          h = contact::bonded_thermal_conductance(mat_s, mat_m, T_s, T_m, face_length[p][pt.slave_face], model.bonded_factor)
                   .value;
         } else {
           const double chi = contact::closure_factor(pt.gap, model.closure_gap).value;
           if (chi > 0)
-            h = chi * contact::thermal_contact_conductance(mat_s, mat_m, contact->pressure[p][i], T_i, props,
+            h = chi * contact::thermal_contact_conductance(mat_s, mat_m, contact->pressure[p][i], T_s, T_m, props,
                                                            model.thermal)
                           .value;
         }

@@ -25,7 +25,7 @@
 //   Gauss points and the interface conductances h at the field it starts from. Like
 //   σ(T) of the electrical field, they are brought up to date by the staggered
 //   coupling iterations of a step (a fixed point of those iterations is the fully
-//   implicit solution). Implicit table k(T) and h(T_i) made Newton stall on the
+//   implicit solution). Implicit table k(T) and h(T_s, T_m) made Newton stall on the
 //   weld: h falls steeply near the solidus, where σ_d drops to the strength floor,
 //   and the kinks of the piecewise-linear k and σ_d tables trap the iterates; the
 //   flux stays conservative either way.
@@ -57,7 +57,7 @@
 // - Sources: bulk Joule heat q_v (W/m³) at the cell Gauss points and interface Joule
 //   heat q_s (W/m²) at the pairing points, both from physics::Electrical; q_s is
 //   released half on each side, distributed with the side's interpolation weights.
-// - Interfaces: at every paired point the flux h (T_s − T_m) with h = HTC(F_n, T_i)
+// - Interfaces: at every paired point the flux h (T_s − T_m) with h = HTC(F_n, T_s, T_m)
 //   χ(g) (paper eq. 2 times the C¹ closure factor, contact/interface_laws.hpp), or
 //   the bonded conductance at bonded S/S points (perfect thermal contact).
 // - Boundaries: water cooling q = h_w (T − T_w) on every "*.cooling_bore"; air

@@ -115,7 +115,7 @@ TEST(ElectricalContact, TwoBlockPotentialMatchesClosedForm) {
   const Eigen::VectorXd T = Eigen::VectorXd::Constant(mesh.n_nodes(), 20.0);
   const auto& sol = electrical.solve(mesh.nodes, T, current, contact);
 
-  const double C = contact::electrical_contact_conductance(upper_mat, lower_mat, pressure, 20.0, model.interfaces[0]).value;
+  const double C = contact::electrical_contact_conductance(upper_mat, lower_mat, pressure, 20.0, 20.0, model.interfaces[0]).value;
   const double s1 = 1 / rho_1, s2 = 1 / rho_2;
   const double D = s1 * s2 + C * L * (s1 + s2);
   const double V = current / (M_PI * radius * radius) * (L / s1 + 1 / C + L / s2);
@@ -161,7 +161,7 @@ TEST(ElectricalContact, TwoBlockOnNonMatchingMeshesConservesCurrent) {
   const auto contact = fixed_contact(pairings, [&](const std::string&, const fem::Point&) { return pressure; });
   const Eigen::VectorXd T = Eigen::VectorXd::Constant(mesh.n_nodes(), 20.0);
   const auto& sol = electrical.solve(mesh.nodes, T, current, contact);
-  const double C = contact::electrical_contact_conductance(upper_mat, lower_mat, pressure, 20.0, model.interfaces[0]).value;
+  const double C = contact::electrical_contact_conductance(upper_mat, lower_mat, pressure, 20.0, 20.0, model.interfaces[0]).value;
   const double V = current / (M_PI * radius * radius) * (L * 2e-8 + 1 / C + L * 3e-7);
   std::printf("two-block contact, non-matching meshes: V = %.9e V (closed form %.9e, %.1e relative), interface "
               "current %.9f A, ground current %.9f A\n",

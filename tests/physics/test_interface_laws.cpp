@@ -125,46 +125,67 @@ TEST(InterfaceLaws, InterfaceJouleHeatIsConductanceTimesJumpSquared) {
   EXPECT_NEAR(q.slope, fd, 1e-6 * fd);
 }
 
-// The material wrappers: properties at the interface temperature, and d/dT and
-// d/dσ_n equal to finite differences (CuCrZr on DP1200 at 555 °C, between table points).
-TEST(InterfaceLaws, MaterialConductancesHaveConsistentDerivatives) {
+// The material wrappers: each side's properties at its own temperature (CuCrZr at
+// 455 °C on DP1200 at 655 °C, between table points), and d/dT_a, d/dT_b and d/dσ_n
+// equal to finite differences.
+TEST(InterfaceLaws, MaterialConductancesUseEachSidesTemperatureWithConsistentDerivatives) {
   materials::MaterialLibrary library;
   const auto copper = library.load("CuCrZr");
   const auto steel = library.load("DP1200");
   contact::InterfaceProperties props{"es", 1e-5, 5e-6, 1e-2, false};
   const contact::ThermalContactConstants constants;
-  const double T = 555.0, p = 200e6;
+  const double Ta = 455.0, Tb = 655.0, p = 200e6;
 
-  const auto he = contact::electrical_contact_conductance(copper, steel, p, T, props);
-  const double soft = std::min(copper.yield_stress(0, T).yield_stress, steel.yield_stress(0, T).yield_stress);
-  const double rho_bar = 0.5 * (copper.electrical_resistivity(T).value + steel.electrical_resistivity(T).value);
+  const auto he = contact::electrical_contact_conductance(copper, steel, p, Ta, Tb, props);
+  const double soft = std::min(copper.yield_stress(0, Ta).yield_stress, steel.yield_stress(0, Tb).yield_stress);
+  const double rho_bar = 0.5 * (copper.electrical_resistivity(Ta).value + steel.electrical_resistivity(Tb).value);
   const double expected = 1 / ((3 * soft / p * rho_bar + props.coating_resistivity) * props.film_thickness);
   EXPECT_NEAR(he.value, expected, 1e-12 * expected);
-  const auto he_T = [&](double x) { return contact::electrical_contact_conductance(copper, steel, p, x, props).value; };
-  const auto he_p = [&](double x) { return contact::electrical_contact_conductance(copper, steel, x, T, props).value; };
-  EXPECT_NEAR(he.d_temperature, central_difference(he_T, T, 1e-3), 1e-5 * std::abs(he.d_temperature));
+  const auto he_a = [&](double x) { return contact::electrical_contact_conductance(copper, steel, p, x, Tb, props).value; };
+  const auto he_b = [&](double x) { return contact::electrical_contact_conductance(copper, steel, p, Ta, x, props).value; };
+  const auto he_p = [&](double x) { return contact::electrical_contact_conductance(copper, steel, x, Ta, Tb, props).value; };
+  EXPECT_NEAR(he.d_temperature_a, central_difference(he_a, Ta, 1e-3), 1e-5 * std::abs(he.d_temperature_a) + 1e-12 * he.value);
+  EXPECT_NEAR(he.d_temperature_b, central_difference(he_b, Tb, 1e-3), 1e-5 * std::abs(he.d_temperature_b) + 1e-12 * he.value);
+  EXPECT_NE(he.d_temperature_a + he.d_temperature_b, 0.0);
   EXPECT_NEAR(he.d_pressure, central_difference(he_p, p, 1e3), 1e-6 * std::abs(he.d_pressure));
 
-  const auto ht = contact::thermal_contact_conductance(copper, steel, p, T, props, constants);
-  const auto ht_T = [&](double x) {
-    return contact::thermal_contact_conductance(copper, steel, p, x, props, constants).value;
+  const auto ht = contact::thermal_contact_conductance(copper, steel, p, Ta, Tb, props, constants);
+  const double k_bar = 0.5 * (copper.thermal_conductivity(Ta).value + steel.thermal_conductivity(Tb).value);
+  const double ht_expected =
+      props.htc_p1 * k_bar / constants.p2 * std::pow(1 - std::exp(-constants.p3 * (p / soft + constants.p3)), constants.p4);
+  EXPECT_NEAR(ht.value, ht_expected, 1e-12 * ht_expected);
+  const auto ht_a = [&](double x) {
+    return contact::thermal_contact_conductance(copper, steel, p, x, Tb, props, constants).value;
+  };
+  const auto ht_b = [&](double x) {
+    return contact::thermal_contact_conductance(copper, steel, p, Ta, x, props, constants).value;
   };
   const auto ht_p = [&](double x) {
-    return contact::thermal_contact_conductance(copper, steel, x, T, props, constants).value;
+    return contact::thermal_contact_conductance(copper, steel, x, Ta, Tb, props, constants).value;
   };
-  EXPECT_NEAR(ht.d_temperature, central_difference(ht_T, T, 1e-3), 1e-5 * std::abs(ht.d_temperature) + 1e-9 * ht.value);
+  EXPECT_NEAR(ht.d_temperature_a, central_difference(ht_a, Ta, 1e-3), 1e-5 * std::abs(ht.d_temperature_a) + 1e-9 * ht.value);
+  EXPECT_NEAR(ht.d_temperature_b, central_difference(ht_b, Tb, 1e-3), 1e-5 * std::abs(ht.d_temperature_b) + 1e-9 * ht.value);
   EXPECT_NEAR(ht.d_pressure, central_difference(ht_p, p, 1e3), 1e-6 * std::abs(ht.d_pressure));
-  std::printf("CuCrZr/DP1200 at 555 degC, 200 MPa: h_e = %.4e S/m^2, HTC = %.4e W/m^2K (P1 = 1e-2)\n", he.value,
-              ht.value);
+  std::printf("CuCrZr at 455 degC on DP1200 at 655 degC, 200 MPa: h_e = %.4e S/m^2, HTC = %.4e W/m^2K (P1 = 1e-2)\n",
+              he.value, ht.value);
 
-  const auto hb = contact::bonded_thermal_conductance(steel, steel, T, 62.5e-6, 1e3);
-  const auto hb_T = [&](double x) { return contact::bonded_thermal_conductance(steel, steel, x, 62.5e-6, 1e3).value; };
-  EXPECT_NEAR(hb.d_temperature, central_difference(hb_T, T, 1e-3), 1e-6 * std::abs(hb.d_temperature));
-  const auto hbe = contact::bonded_electrical_conductance(steel, steel, T, 62.5e-6, 1e3);
-  const auto hbe_T = [&](double x) {
-    return contact::bonded_electrical_conductance(steel, steel, x, 62.5e-6, 1e3).value;
+  const auto hb = contact::bonded_thermal_conductance(steel, steel, Ta, Tb, 62.5e-6, 1e3);
+  EXPECT_NEAR(hb.value,
+              1e3 * (steel.thermal_conductivity(Ta).value + steel.thermal_conductivity(Tb).value) / 62.5e-6,
+              1e-12 * hb.value);
+  const auto hb_a = [&](double x) { return contact::bonded_thermal_conductance(steel, steel, x, Tb, 62.5e-6, 1e3).value; };
+  const auto hb_b = [&](double x) { return contact::bonded_thermal_conductance(steel, steel, Ta, x, 62.5e-6, 1e3).value; };
+  EXPECT_NEAR(hb.d_temperature_a, central_difference(hb_a, Ta, 1e-3), 1e-6 * std::abs(hb.d_temperature_a));
+  EXPECT_NEAR(hb.d_temperature_b, central_difference(hb_b, Tb, 1e-3), 1e-6 * std::abs(hb.d_temperature_b) + 1e-9 * hb.value);
+  const auto hbe = contact::bonded_electrical_conductance(steel, steel, Ta, Tb, 62.5e-6, 1e3);
+  const auto hbe_a = [&](double x) {
+    return contact::bonded_electrical_conductance(steel, steel, x, Tb, 62.5e-6, 1e3).value;
   };
-  EXPECT_NEAR(hbe.d_temperature, central_difference(hbe_T, T, 1e-3), 1e-6 * std::abs(hbe.d_temperature));
+  const auto hbe_b = [&](double x) {
+    return contact::bonded_electrical_conductance(steel, steel, Ta, x, 62.5e-6, 1e3).value;
+  };
+  EXPECT_NEAR(hbe.d_temperature_a, central_difference(hbe_a, Ta, 1e-3), 1e-6 * std::abs(hbe.d_temperature_a));
+  EXPECT_NEAR(hbe.d_temperature_b, central_difference(hbe_b, Tb, 1e-3), 1e-6 * std::abs(hbe.d_temperature_b));
 }
 
 // A bonded interface adds a resistance 1/h = h_local/(2 F k) per unit area: 1/(2F) of

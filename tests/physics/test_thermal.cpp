@@ -232,8 +232,8 @@ TEST(ThermalVerification, TwoBlockElectroThermalContactMatchesClosedForm) {
   }
 
   const double j = current / (M_PI * R * R);
-  const double C = contact::electrical_contact_conductance(upper_mat, lower_mat, pressure, T_0, model.interfaces[0]).value;
-  const double h = contact::thermal_contact_conductance(upper_mat, lower_mat, pressure, T_0, model.interfaces[0],
+  const double C = contact::electrical_contact_conductance(upper_mat, lower_mat, pressure, T_0, T_0, model.interfaces[0]).value;
+  const double h = contact::thermal_contact_conductance(upper_mat, lower_mat, pressure, T_0, T_0, model.interfaces[0],
                                                         model.thermal)
                        .value;
   const double q1 = j * j * 1e-7, q2 = j * j * 3e-7, qs = j * j / C, k1 = 50, k2 = 25;
