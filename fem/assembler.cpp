@@ -2,7 +2,9 @@
 #include "fem/assembler.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cstdint>
+#include <exception>
 #include <stdexcept>
 
 namespace rsw::fem {
@@ -182,6 +184,11 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
   const int n_local = dofs_.dofs_per_cell();
 
   if (cell_kernel) {
+    // An exception may not leave an OpenMP region (the process would terminate): the
+    // first one thrown by a cell kernel is kept, the remaining cells are skipped, and
+    // it is rethrown after the region.
+    std::exception_ptr failure;
+    std::atomic<bool> failed{false};
     for (const auto& cells : colours_) {
       const int n = static_cast<int>(cells.size());
 #pragma omp parallel
@@ -189,12 +196,19 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
         LocalSystem local;
 #pragma omp for schedule(static)
         for (int k = 0; k < n; ++k) {
-          local.matrix.setZero(n_local, n_local);
-          local.vector.setZero(n_local);
-          cell_kernel(cells[k], local);
-          scatter(cells[k], local, K, F, homogeneous, assemble_matrix);
+          if (failed.load(std::memory_order_relaxed)) continue;
+          try {
+            local.matrix.setZero(n_local, n_local);
+            local.vector.setZero(n_local);
+            cell_kernel(cells[k], local);
+            scatter(cells[k], local, K, F, homogeneous, assemble_matrix);
+          } catch (...) {
+#pragma omp critical(rsw_assembler_failure)
+            if (!failed.exchange(true)) failure = std::current_exception();
+          }
         }
       }
+      if (failure) std::rethrow_exception(failure);
     }
   }
   // Cells on hub dofs, face terms and coupling groups: serial.

@@ -4,8 +4,12 @@
 #include "fem/fe_values.hpp"
 #include "fem/linear_solver.hpp"
 #include "fem/quadtree.hpp"
+#include "fem/threads.hpp"
 
 #include <gtest/gtest.h>
+
+#include <stdexcept>
+#include <string>
 
 using namespace rsw;
 
@@ -70,6 +74,32 @@ TEST(Assembler, CondensedSystemEqualsExplicitProlongation) {
   const Eigen::MatrixXd first = Eigen::MatrixXd(K);
   assembler.assemble([&](int e, fem::LocalSystem& l) { laplace_kernel(mesh, e, l); }, K, F);
   EXPECT_EQ((Eigen::MatrixXd(K) - first).norm(), 0.0);
+}
+
+// A cell kernel that throws (an inverted cell) inside the parallel colour loop: the
+// exception reaches the caller, whatever the thread count, instead of terminating the
+// process (an exception may not leave an OpenMP region).
+TEST(Assembler, ExceptionOfACellKernelReachesTheCaller) {
+  const fem::Mesh mesh = small_mesh();
+  fem::DofMap dofs(mesh, 1);
+  fem::Constraints c(dofs.n_dofs());
+  c.add_hanging_nodes(mesh, dofs);
+  c.close();
+  fem::Assembler assembler(mesh, dofs, c);
+  fem::SparseMatrix K;
+  Eigen::VectorXd F;
+  const int bad = mesh.n_cells() / 2;
+  for (const int threads : {1, 2}) {
+    fem::use_threads(threads);
+    EXPECT_THROW(assembler.assemble(
+                     [&](int e, fem::LocalSystem& l) {
+                       if (e == bad) throw std::runtime_error("cell " + std::to_string(e) + " is inverted");
+                       laplace_kernel(mesh, e, l);
+                     },
+                     K, F),
+                 std::runtime_error);
+  }
+  fem::use_threads(1);
 }
 
 TEST(LinearSolver, CholmodUmfpackAndKluAgreeAndDirichletValuesAreExact) {
