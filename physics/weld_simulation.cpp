@@ -192,7 +192,12 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
   SqueezeSettings ss;
   ss.seat_step = problem.solver.seat_step;
   ss.n_force_steps = problem.solver.squeeze_force_steps;
-  const auto squeeze_result = squeeze(mech, problem.schedule.force.at(0.0), T, ss);
+  SqueezeResult squeeze_result;
+  try {
+    squeeze_result = squeeze(mech, problem.schedule.force.at(0.0), T, ss);
+  } catch (const std::exception& e) {
+    return fail(std::string("squeeze: ") + e.what());
+  }
   for (const auto& s : squeeze_result.steps) result.n_newton_iterations += s.iterations;
   if (!squeeze_result.converged) return fail("squeeze: " + squeeze_result.message);
   result.squeeze_displacement = mech.end_face_displacement();
