@@ -70,6 +70,17 @@ contact::ContactState fixed_contact(const std::vector<contact::InterfacePairing>
 }
 
 // Thermal settings with no convection anywhere (tests switch on what they need).
+// k = 30 W/(m·K), melting between 1450 and 1490 °C, T_melting = 1500 °C.
+MaterialSpec melting_spec() {
+  MaterialSpec spec;
+  spec.conductivity = PropertyTable::constant(30.0);
+  spec.solidus = 1450;
+  spec.liquidus = 1490;
+  spec.melting_temperature = 1500;
+  spec.latent_heat = 2.7e5;
+  return spec;
+}
+
 physics::ThermalSettings insulated(double initial_temperature) {
   physics::ThermalSettings s;
   s.initial_temperature = initial_temperature;
@@ -484,12 +495,7 @@ TEST(ThermalNewton, TangentMatchesFiniteDifferences) {
 // uniform source q: at steady state T(z) = T_b + q (2Lz − z²)/(2k), nodally exact for
 // this 1-D problem, everywhere above T_melting = 1500 °C.
 TEST(ThermalVerification, MeltConductivityReplacesTableAboveMeltingTemperature) {
-  MaterialSpec spec;
-  spec.conductivity = PropertyTable::constant(30.0);
-  spec.solidus = 1450;
-  spec.liquidus = 1490;
-  spec.melting_temperature = 1500;
-  spec.latent_heat = 2.7e5;
+  const MaterialSpec spec = melting_spec();
   const auto metal = make_material(spec);
   const double L = 1e-3, q = 1e10, T_b = 1600, lambda_m = 100;
   const std::vector<contact::InterfacePairing> none;
@@ -528,12 +534,7 @@ TEST(ThermalVerification, MeltConductivityReplacesTableAboveMeltingTemperature) 
 // does not depend on the field it starts from (a blend lagged at the start field gives
 // the linear profile of k = 30 from below).
 TEST(ThermalVerification, MeltBlendIsImplicitAndNodallyExactInKirchhoffForm) {
-  MaterialSpec spec;
-  spec.conductivity = PropertyTable::constant(30.0);
-  spec.solidus = 1450;
-  spec.liquidus = 1490;
-  spec.melting_temperature = 1500;
-  spec.latent_heat = 2.7e5;
+  const MaterialSpec spec = melting_spec();
   const auto metal = make_material(spec);
   const double L = 1e-3, T_b = 1460, T_t = 1540, lambda_m = 100, band = 20;
   auto k = [&](double tau) {
