@@ -178,10 +178,16 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
   Mechanics mech(mesh, body_materials, ms, problem.thermal.initial_temperature);
   const Eigen::VectorXd T = Eigen::VectorXd::Constant(mesh.n_nodes(), problem.thermal.initial_temperature);
 
+  // Set when an electrode first reaches its solidus (the run goes on): a later failure
+  // (mechanics, an inverted cell of the molten face, the coupling) is most likely its
+  // consequence, and the failure message says so.
+  std::string electrode_melting_note;
   auto fail = [&](const std::string& message) {
     result.success = false;
     result.message = message;
-    std::ofstream(partial / "failure.txt") << message << "\n";
+    if (!electrode_melting_note.empty())
+      result.message += " (after an electrode had melted, " + electrode_melting_note + ")";
+    std::ofstream(partial / "failure.txt") << result.message << "\n";
     result.wall_time = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
     return result;
   };
@@ -372,10 +378,10 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
         char text[320];
         std::snprintf(text, sizeof text,
                       "%s reaches %.0f degC at (r, z) = (%.2f, %.2f) mm, above the solidus of its material "
-                      "(%.0f degC): a melting electrode is outside the model (contact parameters too resistive?)",
+                      "(%.0f degC)",
                       mesh.body_names[b].c_str(), T[n], mech.positions()[n].x() * 1e3, mech.positions()[n].y() * 1e3,
                       solidus[b]);
-        return text;
+        return text + std::string(": a melting electrode is outside the model (contact parameters too resistive?)");
       }
     }
     return {};
@@ -503,6 +509,7 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
           result.electrode_melting_time = t;
           char at[64];
           std::snprintf(at, sizeof at, "at t = %.1f ms: ", t * 1e3);
+          electrode_melting_note = at + melting.substr(0, melting.find(": a melting electrode"));
           result.warnings.push_back(at + melting + "; the run goes on (solver.electrode_melting = continue)");
         }
       last_coupling = it;

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <memory>
 #include <sstream>
@@ -163,6 +164,27 @@ TEST(WeldRun, ElectrodeReachingSolidusWarnsOrStopsAsConfigured) {
   EXPECT_NE(out.find("above the solidus of its material"), std::string::npos) << out;
   EXPECT_FALSE(fs::exists(base / "stop" / "summary.json"));
   fs::remove_all(base);
+}
+
+// With a still more resistive film (t_f = 0.3 mm) the upper electrode's face melts at
+// about 7 ms; the run goes on (the default) and fails later with the face far above the
+// solidus. The failure message then says when and where the electrode had first melted,
+// whatever stage fails, because the failure most likely follows from it.
+TEST(WeldRun, FailureAfterElectrodeMeltingSaysWhenTheElectrodeMelted) {
+  const fs::path dir = fs::temp_directory_path() / ("rsw_melted_" + std::to_string(::getpid()));
+  std::string out;
+  EXPECT_NE(run_rsw("simulate " + paper_case + " -q -o " + dir.string() +
+                        " --set mesh.base_size=0.5mm --set mesh.weld_zone.levels=1 --set output.fields=false"
+                        " --set contact.electrode_sheet.film_thickness=0.3mm",
+                    out),
+            0);
+  std::ifstream in(fs::path(dir.string() + ".partial") / "failure.txt");
+  std::string failure((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(failure.find("after an electrode had melted, at t = "), std::string::npos) << failure;
+  EXPECT_NE(out.find("after an electrode had melted, at t = "), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir / "summary.json"));
+  fs::remove_all(dir);
+  fs::remove_all(dir.string() + ".partial");
 }
 
 // One feature extractor for simulated and measured signals: rsw features reads the
