@@ -61,6 +61,22 @@ bool bonds(double temperature_slave, double solidus_slave, double temperature_ma
   return temperature_slave >= solidus_slave && temperature_master >= solidus_master;
 }
 
+double bonding_degree(double temperature_slave, double solidus_slave, double temperature_master,
+                      double solidus_master, double band) {
+  const double above = std::min(temperature_slave - solidus_slave, temperature_master - solidus_master);
+  if (above >= 0) return 1.0;
+  if (!(band > 0)) return 0.0;
+  const double x = std::clamp((above + band) / band, 0.0, 1.0);
+  return x * x * (3 - 2 * x);
+}
+
+double partly_bonded_conductance(double contact, double bonded, double degree) {
+  if (degree >= 1) return bonded;
+  if (degree <= 0) return contact;
+  if (!(contact > 0)) return 0.0;
+  return 1.0 / ((1 - degree) / contact + degree / bonded);
+}
+
 const InterfaceProperties& InterfaceModel::at(const std::string& name) const {
   for (const auto& p : interfaces)
     if (p.name == name) return p;
@@ -128,12 +144,18 @@ Conductance bonded_thermal_conductance(const materials::Material& a, const mater
 }
 
 BondingState::BondingState(const std::vector<InterfacePairing>& pairings) {
-  for (const auto& p : pairings) flags_.emplace_back(p.points().size(), 0);
+  for (const auto& p : pairings) degree_.emplace_back(p.points().size(), 0.0);
+}
+
+void BondingState::raise(int interface, int point, double value) {
+  double& b = degree_[interface][point];
+  b = std::max(b, std::min(1.0, value));
 }
 
 int BondingState::n_bonded(int interface) const {
-  if (flags_.empty()) return 0;
-  return static_cast<int>(std::count(flags_[interface].begin(), flags_[interface].end(), 1));
+  if (degree_.empty()) return 0;
+  return static_cast<int>(
+      std::count_if(degree_[interface].begin(), degree_[interface].end(), [](double b) { return b >= 1.0; }));
 }
 
 std::vector<double> slave_face_lengths(const fem::Mesh& mesh, const InterfacePairing& pairing) {

@@ -221,16 +221,21 @@ struct Electrical::Impl {
             pairing.local_index(pt.slave_face, pt.master_nodes[1]) < 0)
           continue;
         const Sides s = sides(pt);
-        const bool bonded = props.bonding && bonding.bonded(static_cast<int>(p), static_cast<int>(i));
-        if (bonded) {
-          out[p][i] = contact::bonded_electrical_conductance(*s.slave, *s.master, s.slave_temperature, s.master_temperature,
-                                                             face_length[p][pt.slave_face], model.bonded_factor)
-                          .value;
-        } else if (contact->pressure[p][i] > 0) {
-          out[p][i] = contact::electrical_contact_conductance(*s.slave, *s.master, contact->pressure[p][i],
+        const double beta = props.bonding ? bonding.degree(static_cast<int>(p), static_cast<int>(i)) : 0.0;
+        double h_contact = 0;
+        if (beta < 1 && contact->pressure[p][i] > 0)
+          h_contact = contact::electrical_contact_conductance(*s.slave, *s.master, contact->pressure[p][i],
                                                               s.slave_temperature, s.master_temperature, props)
                           .value;
-        }
+        out[p][i] = beta > 0 ? contact::partly_bonded_conductance(
+                                   h_contact,
+                                   contact::bonded_electrical_conductance(*s.slave, *s.master, s.slave_temperature,
+                                                                          s.master_temperature,
+                                                                          face_length[p][pt.slave_face],
+                                                                          model.bonded_factor)
+                                       .value,
+                                   beta)
+                             : h_contact;
       }
     }
   }
@@ -475,6 +480,7 @@ contact::ContactState contact_state(const Mechanics& mechanics) {
 contact::InterfaceModel interface_model(const fem::Mesh& mesh, const ContactParameters& parameters) {
   contact::InterfaceModel model;
   model.thermal = {parameters.htc_p2, parameters.htc_p3, parameters.htc_p4};
+  model.bonding_band = parameters.bonding_band;
   for (const auto& [name, pair] : mesh.interfaces) {
     contact::InterfaceProperties props;
     props.name = name;

@@ -59,6 +59,7 @@ struct Mechanics::Impl {
   // t = ε_N (d_b - d), exact and linear in the displacements.
   struct Tie {
     bool on = false;
+    double degree = 0;  // bonding degree β ∈ [0, 1], never decreasing
     std::array<int, 2> master_nodes{};
     std::array<double, 2> master_weights{};
     Eigen::Vector2d reference = Eigen::Vector2d::Zero();  // d_b
@@ -392,9 +393,12 @@ struct Mechanics::Impl {
         for (int s = 0; s < 2; ++s)
           d -= tie.master_weights[s] * (current.nodes[tie.master_nodes[s]] + node_increment(tie.master_nodes[s]));
         const Eigen::Vector2d traction = eps_n * (tie.reference - d);  // on the slave side
-        add(pt.reference_area * B.transpose() * traction, eps_n * pt.reference_area * B.transpose() * B);
-        continue;
+        const double beta = tie.degree;
+        add(beta * pt.reference_area * B.transpose() * traction, beta * eps_n * pt.reference_area * B.transpose() * B);
+        if (beta >= 1) continue;
       }
+      // Contact and friction carry the share 1 − β of a partly bonded point.
+      const double share = tie.on ? 1 - tie.degree : 1.0;
       if (!pt.paired || pt.gap >= 0) continue;
       if (!locate(pt.slave_nodes, pt.master_nodes)) {
         pairing_within = false;
@@ -460,7 +464,7 @@ struct Mechanics::Impl {
         if (geometric)
           stiffness += (tau_value * A / L) * (Nv * Dv.transpose() - Dt * Tv.transpose() - gL * Dt * Dv.transpose());
       }
-      add(force, stiffness);
+      add(share * force, share * stiffness);
     }
   }
 
@@ -885,20 +889,32 @@ double Mechanics::normal_penalty(const std::string& interface) const {
 const std::vector<contact::InterfacePairing>& Mechanics::pairings() const { return impl_->pairings; }
 
 void Mechanics::set_bonded(const std::vector<std::vector<char>>& bonded) {
+  std::vector<std::vector<double>> degree(bonded.size());
+  for (std::size_t p = 0; p < bonded.size(); ++p)
+    for (char b : bonded[p]) degree[p].push_back(b ? 1.0 : 0.0);
+  set_bonding_degree(degree);
+}
+
+void Mechanics::set_bonding_degree(const std::vector<std::vector<double>>& degree) {
   Impl& m = *impl_;
-  for (std::size_t p = 0; p < m.pairings.size() && p < bonded.size(); ++p)
-    for (std::size_t i = 0; i < m.pairings[p].points().size() && i < bonded[p].size(); ++i) {
+  for (std::size_t p = 0; p < m.pairings.size() && p < degree.size(); ++p)
+    for (std::size_t i = 0; i < m.pairings[p].points().size() && i < degree[p].size(); ++i) {
       auto& tie = m.ties[p][i];
       const auto& pt = m.pairings[p].points()[i];
-      if (!bonded[p][i] || tie.on || !pt.paired) continue;
-      // Bond in the state reached, keeping the contact traction p n of that moment.
+      if (tie.on) tie.degree = std::max(tie.degree, std::min(1.0, degree[p][i]));
+      if (!(degree[p][i] > 0) || tie.on || !pt.paired) continue;
+      tie.degree = std::min(1.0, degree[p][i]);
+      // Bond in the state reached, keeping the whole contact traction of that moment,
+      // p n − τ t (pressure and committed friction; the slave side's traction in
+      // group_kernel), so that the traction is continuous when the point bonds.
       tie.on = true;
       tie.master_nodes = pt.master_nodes;
       tie.master_weights = pt.master_weights;
       const Eigen::Vector2d x_m = pt.master_weights[0] * m.current.nodes[pt.master_nodes[0]] +
                                   pt.master_weights[1] * m.current.nodes[pt.master_nodes[1]];
       const double pressure = penalty_pressure(pt.gap, m.normal_penalty[p], m.settings.contact_smoothing).pressure;
-      tie.reference = (pt.position - x_m) + pressure / m.normal_penalty[p] * pt.normal;
+      const double friction = m.tau[p][i];
+      tie.reference = (pt.position - x_m) + (pressure * pt.normal - friction * pt.tangent) / m.normal_penalty[p];
     }
 }
 
@@ -909,10 +925,13 @@ std::vector<double> Mechanics::contact_pressure(int p) const {
   for (std::size_t i = 0; i < points.size(); ++i) {
     const auto& pt = points[i];
     const auto& tie = m.ties[p][i];
-    if (tie.on) {  // normal component of the tie traction, compressive part
+    if (tie.on) {  // normal component of the tie traction, compressive part, and contact
       const Eigen::Vector2d x_m = tie.master_weights[0] * m.current.nodes[tie.master_nodes[0]] +
                                   tie.master_weights[1] * m.current.nodes[tie.master_nodes[1]];
-      out.push_back(std::max(0.0, m.normal_penalty[p] * (tie.reference - (pt.position - x_m)).dot(pt.normal)));
+      const double contact =
+          pt.paired ? penalty_pressure(pt.gap, m.normal_penalty[p], m.settings.contact_smoothing).pressure : 0.0;
+      out.push_back(tie.degree * std::max(0.0, m.normal_penalty[p] * (tie.reference - (pt.position - x_m)).dot(pt.normal)) +
+                    (1 - tie.degree) * contact);
     } else {
       out.push_back(pt.paired ? penalty_pressure(pt.gap, m.normal_penalty[p], m.settings.contact_smoothing).pressure : 0.0);
     }

@@ -141,11 +141,16 @@ class Mechanics {
   // Accepts the last converged step: history, geometry and totals move forward.
   void commit();
   // Points of sheet/sheet interfaces bonded by melting (flags per pairing point, in
-  // pairing order). A bonded point is tied: its normal traction follows the gap
-  // change since bonding linearly in tension and compression, p = ε_N (g_b - g), and
-  // its tangential traction the slip since bonding, τ = ε_T s, with no friction
+  // pairing order). A bonded point is tied: its traction follows the change of the
+  // relative position since bonding linearly in tension and compression, t = ε_N
+  // (d_b − d), starting from the contact traction of that moment, with no friction
   // limit, so the two sheets move as one body there. Takes effect from the next step.
   void set_bonded(const std::vector<std::vector<char>>& bonded);
+  // The same with a bonding degree β ∈ [0, 1] per point (never decreasing; values
+  // above 1 read as 1): the tie carries the share β of the traction, contact and
+  // friction the share 1 − β. The tie is formed where β first exceeds 0, keeping the
+  // contact traction of that moment, so the traction is continuous in β and in time.
+  void set_bonding_degree(const std::vector<std::vector<double>>& degree);
 
   // Totals after the last commit.
   const std::vector<fem::Point>& positions() const { return positions_; }

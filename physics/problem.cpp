@@ -191,6 +191,15 @@ ConfigSchema build_schema() {
   s.number("contact.friction_coefficient", "1", "1").default_value("0.3")
       .range(Range::closed(0, 1))
       .doc("Coulomb friction coefficient on all contact interfaces; 0 is frictionless.");
+  s.number("contact.bonding_band", "K", "K").default_value("50 K")
+      .range(Range::closed(0, 200))
+      .doc("Sheet/sheet points bond gradually as both sides approach their solidus: the "
+           "bonding degree rises smoothly (C1) from 0 at this much below the solidus to 1 at "
+           "it and never falls; the film resistance fades with it, in series with the bonded "
+           "layer, and the mechanics tie takes the share of the traction it gives. 0 bonds a "
+           "point all at once when both sides reach the solidus, which makes the dynamic "
+           "resistance drop by up to 10 % in one step where a region bonds together and the "
+           "outputs jump between neighbouring parameter values.");
 
   s.section("thermal", "Initial and boundary conditions of the thermal field, and the "
                        "modified conductivity of the melt.");
@@ -463,6 +472,7 @@ Problem make_problem(const Config& config) {
   problem.contact.htc_p3 = config.number("contact.htc_p3");
   problem.contact.htc_p4 = config.number("contact.htc_p4");
   problem.contact.friction_coefficient = config.number("contact.friction_coefficient");
+  problem.contact.bonding_band = config.number("contact.bonding_band");
 
   ThermalParameters& thermal = problem.thermal;
   thermal.initial_temperature = config.number("thermal.initial_temperature");

@@ -387,16 +387,22 @@ struct Thermal::Impl {
         const double T_m = pt.master_weights[0] * T[pt.master_nodes[0]] + pt.master_weights[1] * T[pt.master_nodes[1]];
         const materials::Material& mat_s = *node_material[pt.slave_nodes[0]];
         const materials::Material& mat_m = *node_material[pt.master_nodes[0]];
-        if (props.bonding && bonding.bonded(static_cast<int>(p), static_cast<int>(i))) {
-          h = contact::bonded_thermal_conductance(mat_s, mat_m, T_s, T_m, face_length[p][pt.slave_face], model.bonded_factor)
-                  .value;
-        } else {
+        const double beta = props.bonding ? bonding.degree(static_cast<int>(p), static_cast<int>(i)) : 0.0;
+        double h_contact = 0;
+        if (beta < 1) {
           const double chi = contact::closure_factor(pt.gap, model.closure_gap).value;
           if (chi > 0)
-            h = chi * contact::thermal_contact_conductance(mat_s, mat_m, contact->pressure[p][i], T_s, T_m, props,
-                                                           model.thermal)
-                          .value;
+            h_contact = chi * contact::thermal_contact_conductance(mat_s, mat_m, contact->pressure[p][i], T_s, T_m,
+                                                                   props, model.thermal)
+                                  .value;
         }
+        h = beta > 0 ? contact::partly_bonded_conductance(
+                           h_contact,
+                           contact::bonded_thermal_conductance(mat_s, mat_m, T_s, T_m, face_length[p][pt.slave_face],
+                                                               model.bonded_factor)
+                               .value,
+                           beta)
+                     : h_contact;
       }
     }
   }
@@ -538,9 +544,9 @@ struct Thermal::Impl {
         if (!pt.paired || trial_bonding.bonded(static_cast<int>(p), static_cast<int>(i))) continue;
         const double T_s = pt.slave_weights[0] * T[pt.slave_nodes[0]] + pt.slave_weights[1] * T[pt.slave_nodes[1]];
         const double T_m = pt.master_weights[0] * T[pt.master_nodes[0]] + pt.master_weights[1] * T[pt.master_nodes[1]];
-        if (contact::bonds(T_s, node_material[pt.slave_nodes[0]]->solidus(), T_m,
-                           node_material[pt.master_nodes[0]]->solidus()))
-          trial_bonding.bond(static_cast<int>(p), static_cast<int>(i));
+        trial_bonding.raise(static_cast<int>(p), static_cast<int>(i),
+                            contact::bonding_degree(T_s, node_material[pt.slave_nodes[0]]->solidus(), T_m,
+                                                    node_material[pt.master_nodes[0]]->solidus(), model.bonding_band));
       }
     }
   }

@@ -538,28 +538,33 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
       if (std::getenv("RSW_VERBOSE"))
         std::fprintf(stderr, "step %zu: t = %.1f ms, T_max = %.1f, T(apex) = %.1f, coupling %d\n", k, t * 1e3,
                      T_iter.maxCoeff(), T_iter[mesh.boundary_nodes("upper_electrode.contact_face").front()], it);
-      // Sheets fuse where both sides of a sheet/sheet point have reached the solidus
-      // (committed bonding, or reached in this step): the mechanics ties them from this
-      // step on, so molten sheets never meet across a frictionless contact.
+      // Sheets fuse where both sides of a sheet/sheet point approach their solidus: the
+      // bonding degree β (contact::bonding_degree; the committed thermal history, or
+      // this step's temperatures) never decreases, and the mechanics ties the point with
+      // the share β of its traction from this step on (Mechanics::set_bonding_degree),
+      // so molten sheets never meet across a frictionless contact.
       {
         const auto& bonding = thermal.bonding();
         const auto& pairings = mech.pairings();
-        std::vector<std::vector<char>> flags(pairings.size());
+        std::vector<std::vector<double>> degree(pairings.size());
         for (std::size_t p = 0; p < pairings.size(); ++p) {
-          flags[p].assign(pairings[p].points().size(), 0);
-          const bool sheet_sheet = pairings[p].name().rfind("ss_", 0) == 0;
-          for (std::size_t i = 0; i < flags[p].size(); ++i) {
+          degree[p].assign(pairings[p].points().size(), 0.0);
+          if (pairings[p].name().rfind("ss_", 0) != 0) continue;
+          for (std::size_t i = 0; i < degree[p].size(); ++i) {
             const auto& pt = pairings[p].points()[i];
-            bool bonded = static_cast<int>(p) < bonding.n_interfaces() && bonding.bonded(static_cast<int>(p), static_cast<int>(i));
-            if (!bonded && sheet_sheet && pt.paired) {
+            double& beta = degree[p][i];
+            if (static_cast<int>(p) < bonding.n_interfaces())
+              beta = bonding.degree(static_cast<int>(p), static_cast<int>(i));
+            if (beta < 1 && pt.paired) {
               const double Ts = pt.slave_weights[0] * T_iter[pt.slave_nodes[0]] + pt.slave_weights[1] * T_iter[pt.slave_nodes[1]];
               const double Tm = pt.master_weights[0] * T_iter[pt.master_nodes[0]] + pt.master_weights[1] * T_iter[pt.master_nodes[1]];
-              bonded = Ts >= solidus[mesh.node_body[pt.slave_nodes[0]]] && Tm >= solidus[mesh.node_body[pt.master_nodes[0]]];
+              beta = std::max(beta, contact::bonding_degree(Ts, solidus[mesh.node_body[pt.slave_nodes[0]]], Tm,
+                                                            solidus[mesh.node_body[pt.master_nodes[0]]],
+                                                            problem.contact.bonding_band));
             }
-            flags[p][i] = bonded;
           }
         }
-        mech.set_bonded(flags);
+        mech.set_bonding_degree(degree);
       }
       clock.start("mechanics");
       // The mechanics follows the temperature and force changes of the step; where

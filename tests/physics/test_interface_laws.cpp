@@ -204,3 +204,34 @@ TEST(InterfaceLaws, PointBondsOnlyWhenBothSidesReachTheSolidus) {
   EXPECT_FALSE(contact::bonds(1469.9, 1470, 1600, 1470));
   EXPECT_FALSE(contact::bonds(1600, 1470, 1400, 1470));
 }
+
+// β = S(x), x = (min(T_s − T_sol,s, T_m − T_sol,m) + Δ)/Δ, S = 3x² − 2x³: 0 at Δ below the
+// colder side's solidus, S(1/2) = 1/2 half-way, 1 from the solidus on; C¹ at both ends
+// (S'(0) = S'(1) = 0, checked by one-sided differences); Δ = 0 is the all-or-nothing rule.
+TEST(InterfaceLaws, BondingDegreeRisesSmoothlyOverTheBandBelowTheColderSidesSolidus) {
+  const double sol = 1470, band = 50;
+  EXPECT_EQ(contact::bonding_degree(sol - 50, sol, sol + 200, sol, band), 0.0);
+  EXPECT_EQ(contact::bonding_degree(sol - 80, sol, sol - 10, sol, band), 0.0);
+  EXPECT_NEAR(contact::bonding_degree(sol - 25, sol, sol + 10, sol, band), 0.5, 1e-15);
+  EXPECT_NEAR(contact::bonding_degree(sol + 10, sol, sol - 25, sol, band), 0.5, 1e-15);  // the colder side rules
+  EXPECT_NEAR(contact::bonding_degree(sol - 10, sol, sol, sol, band), 0.8 * 0.8 * (3 - 1.6), 1e-15);
+  EXPECT_EQ(contact::bonding_degree(sol, sol, sol + 1, sol, band), 1.0);
+  EXPECT_EQ(contact::bonding_degree(1500, 1490, 1480, 1470, band), 1.0);  // each side against its own solidus
+  const double h = 1e-4;  // K
+  EXPECT_LT(contact::bonding_degree(sol - band + h, sol, sol, sol, band) / h, 1e-5);
+  EXPECT_LT((1 - contact::bonding_degree(sol - h, sol, sol, sol, band)) / h, 1e-5);
+  for (double T : {sol - 60.0, sol - 1e-9, sol, sol + 5})
+    EXPECT_EQ(contact::bonding_degree(T, sol, T, sol, 0.0), contact::bonds(T, sol, T, sol) ? 1.0 : 0.0) << T;
+}
+
+// A partly bonded point: the film's resistance weighted by 1 − β in series with the
+// bonded layer's, h = 1/((1 − β)/h_c + β/h_b).
+TEST(InterfaceLaws, PartlyBondedConductanceIsTheFadingFilmInSeriesWithTheBondedLayer) {
+  const double hc = 2e10, hb = 4e13;
+  EXPECT_EQ(contact::partly_bonded_conductance(hc, hb, 0.0), hc);
+  EXPECT_EQ(contact::partly_bonded_conductance(hc, hb, 1.0), hb);
+  EXPECT_NEAR(contact::partly_bonded_conductance(hc, hb, 0.5), 1 / (0.5 / hc + 0.5 / hb), 1e-6);
+  EXPECT_NEAR(contact::partly_bonded_conductance(hc, hb, 0.9), 1 / (0.1 / hc + 0.9 / hb), 1e-4);
+  EXPECT_EQ(contact::partly_bonded_conductance(0.0, hb, 0.7), 0.0);  // open contact: no path until bonded
+  EXPECT_EQ(contact::partly_bonded_conductance(0.0, hb, 1.0), hb);
+}

@@ -124,3 +124,48 @@ TEST(MechanicsJacobian, TiedInterfaceTangentMatchesFiniteDifferences) {
   std::printf("tied interface: relative difference %.2e\n", err);
   EXPECT_LT(err, 1e-6);
 }
+
+// Sheets that start to bond (bonding degree β on the sheet/sheet points) after the
+// squeeze: the tie is formed keeping the contact traction of that moment, so the
+// residual of the squeezed state does not depend on β (the traction is continuous as a
+// point bonds), while the tangent of a partly bonded interface (the share β tied, 1 − β
+// contact with friction) matches finite differences like the contact's.
+TEST(MechanicsJacobian, PartlyBondedPointsKeepTheirTractionAndAConsistentTangent) {
+  CoarseCase c;
+  physics::MechanicsSettings s;
+  s.friction_coefficient = 0.3;
+  const Eigen::VectorXd T = Eigen::VectorXd::Constant(c.mesh.n_nodes(), 20.0);
+  std::vector<Eigen::VectorXd> residuals;
+  for (double beta : {0.0, 0.3, 1.0}) {
+    physics::Mechanics mech(c.mesh, {&c.copper, &c.steel, &c.steel, &c.copper}, s, 20.0);
+    const auto sq = physics::squeeze(mech, 3000.0, T);
+    ASSERT_TRUE(sq.converged) << sq.message;
+    std::vector<std::vector<double>> degree;
+    int n_pressed = 0;
+    for (std::size_t p = 0; p < mech.pairings().size(); ++p) {
+      const bool sheet_sheet = mech.pairings()[p].name().rfind("ss_", 0) == 0;
+      degree.emplace_back(mech.pairings()[p].points().size(), sheet_sheet ? beta : 0.0);
+      if (sheet_sheet)
+        for (double pressure : mech.contact_pressure(static_cast<int>(p))) n_pressed += pressure > 1e6;
+    }
+    ASSERT_GT(n_pressed, 3);
+    mech.set_bonding_degree(degree);
+    Eigen::VectorXd R;
+    fem::SparseMatrix K;
+    const Eigen::VectorXd zero =
+        Eigen::VectorXd::Zero(mech.full_increment(Eigen::VectorXd::Zero(mech.n_free_force_control())).size());
+    mech.residual_and_tangent(zero, 3000.0, T, R, K);
+    residuals.push_back(R);
+    if (beta == 0.3) {
+      mech.residual_and_tangent(zero, 3600.0, T, R, K);
+      fem::LinearSolver solver(fem::SolverKind::umfpack);
+      const Eigen::VectorXd base = mech.full_increment(solver.solve(K, R));
+      const double err = jacobian_error(mech, T, 3600.0, base);
+      std::printf("partly bonded (beta 0.3): relative difference %.2e\n", err);
+      EXPECT_LT(err, 1e-3);
+    }
+  }
+  // The squeeze converged to 1e-7 of the load (3e-4 N); bonding must not add to that.
+  for (std::size_t k = 1; k < residuals.size(); ++k)
+    EXPECT_LT((residuals[k] - residuals[0]).lpNorm<Eigen::Infinity>(), 1e-6) << k;
+}
