@@ -820,6 +820,10 @@ std::vector<InterfaceState> Mechanics::interface_states() const {
     std::sort(order.begin(), order.end(), [&](int a, int b) {
       return pairing.points()[a].position.x() < pairing.points()[b].position.x();
     });
+    // Bonded points count as closed for the contact radius: the gap of a point with
+    // bonding degree β enters as (1 − β) g + β min(g, 0), so a fused region held in
+    // slight tension (g of a few nm) is inside the radius, continuously in β.
+    std::vector<double> closure;
     for (int i : order) {
       const auto& pt = pairing.points()[i];
       const double pressure =
@@ -829,13 +833,15 @@ std::vector<InterfaceState> Mechanics::interface_states() const {
       s.gap.push_back(pt.paired ? pt.gap : std::nan(""));
       s.shear.push_back(m.tau[p][i]);
       s.normal_force += pressure * pt.reference_area;
+      const double beta = m.ties[p][i].on ? m.ties[p][i].degree : 0.0;
+      closure.push_back(pt.paired ? (1 - beta) * pt.gap + beta * std::min(pt.gap, 0.0) : std::nan(""));
     }
-    // Outermost zero crossing of the gap, interpolated between points; where the
+    // Outermost zero crossing of that gap, interpolated between points; where the
     // contact reaches the last paired point (no open point follows it), that point.
-    for (std::size_t i = 0; i < s.gap.size(); ++i) {
-      const double g0 = s.gap[i];
+    for (std::size_t i = 0; i < closure.size(); ++i) {
+      const double g0 = closure[i];
       if (std::isnan(g0) || g0 > 0) continue;
-      const double g1 = i + 1 < s.gap.size() ? s.gap[i + 1] : std::nan("");
+      const double g1 = i + 1 < closure.size() ? closure[i + 1] : std::nan("");
       s.contact_radius = g1 > 0 ? s.radius[i] + (s.radius[i + 1] - s.radius[i]) * g0 / (g0 - g1) : s.radius[i];
     }
     out.push_back(std::move(s));

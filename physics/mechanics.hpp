@@ -113,7 +113,7 @@ struct InterfaceState {
   std::vector<double> gap;       // m
   std::vector<double> shear;     // tangential traction, Pa
   double normal_force = 0;       // N, ∫ p dA
-  double contact_radius = 0;     // m, outermost zero of the interpolated gap
+  double contact_radius = 0;     // m, outermost zero of the interpolated gap (bonded points closed)
 };
 
 class Mechanics {

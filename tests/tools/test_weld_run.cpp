@@ -136,6 +136,20 @@ TEST(WeldRun, ElectrodeContactRadiusStaysPositiveUnderForce) {
   EXPECT_GT(j.at("nugget").at("w_elec").get<double>(), 2 * 0.5e-3);
 }
 
+// The sheet/sheet contact radius covers the fused region: inside the nugget the
+// sheets are bonded (held in slight tension by the expanding melt, a gap of
+// nanometres), and bonded points count as closed. At the end of the coarse weld the
+// radius reaches at least 90 % of the solidus nugget's radius (it stopped at 1.6 of
+// 2.8 mm when only compressed points counted).
+TEST(WeldRun, SheetContactRadiusCoversTheFusedNugget) {
+  const auto run = read_csv(coarse_run() / "signals.csv");
+  const double radius = run.at("contact_radius_ss_1_2 [m]").back();
+  const double nugget = 0.5 * run.at("d_n_sol [m]").back();
+  EXPECT_GT(nugget, 2e-3);
+  EXPECT_GT(radius, 0.9 * nugget) << "S/S contact radius " << radius << " m, nugget radius " << nugget << " m";
+  EXPECT_LT(radius, 1.2 * nugget);
+}
+
 // A very resistive electrode/sheet film (t_f = 0.03 mm) heats the electrode face to
 // the CuCrZr solidus about 19 ms into the weld. By default the run records that as a
 // warning (summary.json, results.h5) and finishes; with solver.electrode_melting=stop
