@@ -175,6 +175,7 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
   ms.friction_coefficient = problem.contact.friction_coefficient;
   ms.penalty_factor = problem.solver.contact_penalty_factor;
   ms.contact_smoothing = problem.solver.contact_smoothing;
+  ms.tangential_penalty_ratio = problem.solver.friction_penalty_ratio;
   Mechanics mech(mesh, body_materials, ms, problem.thermal.initial_temperature);
   const Eigen::VectorXd T = Eigen::VectorXd::Constant(mesh.n_nodes(), problem.thermal.initial_temperature);
 

@@ -87,6 +87,55 @@ TEST(MechanicsVerification, LameThickCylinderStressesWithinOnePercent) {
   EXPECT_LT(worst, 0.01);
 }
 
+// A heated core held radially grows axially by its whole volumetric expansion once it
+// yields: the mechanism behind most of a weld's electrode displacement S (a molten
+// core inside cold, strong sheet metal). Ring r in [1, 2] mm, z in [0, 1] mm, u_r = 0
+// on both radial faces (both named "<body>.axis"), bottom fixed in z, top free
+// (force 0), heated uniformly by ΔT, perfectly plastic (σ_y) with constant E, ν, α.
+// The state is uniform: ε_rr = ε_θθ = 0, σ_zz = 0, σ_rr = σ_θθ = s, and
+//   elastic:           s = −E α ΔT / (1 − ν),          ε_zz = α ΔT (1 + ν)/(1 − ν);
+//   yielded (|s| ≥ σ_y): s = −σ_y, plastic flow is isochoric, so tr ε = tr σ/(3K) + 3αΔT:
+//                      ε_zz = 3 α ΔT − 2 σ_y / (3K),   K = E / (3 (1 − 2ν)).
+// E = 210 GPa, ν = 0.3, α = 12e-6 /K, ΔT = 500 K, σ_y = 50 MPa: free expansion
+// α ΔT = 6.0e-3, elastic confinement 1.114e-2, yielded 1.781e-2 (three times the free
+// value, less 1.9e-4 of elastic compression).
+TEST(MechanicsVerification, ConfinedHeatedCoreGrowsAxiallyByItsVolumetricExpansion) {
+  const double E = 210e9, nu = 0.3, alpha = 12e-6, dT = 500.0, sigma_y = 50e6, H = 1e-3;
+  materials::MaterialData d = test::elastic_material("soft_core", E, nu, alpha).data();
+  d.flow_curves = materials::FlowCurveTable({{20.0, {0.0, 1.0}, {sigma_y, sigma_y}}});
+  const materials::Material mat(d);
+  fem::Quadtree tree(8, 8);
+  const fem::Mesh mesh = tree.build(
+      "core", [](double x, double y) { return fem::Point(1e-3 + 1e-3 * x / 8, 1e-3 * y / 8); },
+      [](double, double, fem::Side s) -> std::string {
+        return s == fem::Side::bottom ? "bottom" : s == fem::Side::top ? "top" : "axis";
+      });
+  physics::MechanicsSettings s;
+  s.fixed_boundary = "core.bottom";
+  s.loaded_boundary = "core.top";
+  s.clamp_radially = false;
+  s.friction_coefficient = 0;
+  physics::Mechanics mech(mesh, {&mat}, s, 20.0);
+  const Eigen::VectorXd T = Eigen::VectorXd::Constant(mesh.n_nodes(), 20.0 + dT);
+  const auto report = mech.solve_force_step(0.0, T);
+  ASSERT_TRUE(report.converged) << report.message;
+  mech.commit();
+
+  const double K = E / (3 * (1 - 2 * nu));
+  const double eps_free = alpha * dT, eps_elastic = alpha * dT * (1 + nu) / (1 - nu);
+  const double eps_yielded = 3 * alpha * dT - 2 * sigma_y / (3 * K);
+  const double eps_fe = mech.end_face_displacement() / H;
+  double worst_s = 0;
+  for (const auto& p : mech.point_stresses())
+    worst_s = std::max({worst_s, std::abs(p.stress[0] + sigma_y), std::abs(p.stress[2] + sigma_y),
+                        std::abs(p.stress[1])});
+  std::printf("confined heated core: axial strain %.6e (closed form %.6e; free %.3e, elastic confinement %.3e), "
+              "worst stress error %.2e Pa\n",
+              eps_fe, eps_yielded, eps_free, eps_elastic, worst_s);
+  EXPECT_NEAR(eps_fe, eps_yielded, 1e-9 * eps_yielded);
+  EXPECT_LT(worst_s, 1e-6 * sigma_y);
+}
+
 // Hertz: the R30 CuCrZr dome (E = 128 GPa) pressed on steel (E = 210 GPa), ν = 0.3,
 // both elastic, frictionless: E* = 87.4 GPa, and at 3 kN
 //   a = (3FR/(4E*))^(1/3) = 0.918 mm, p0 = 3F/(2πa²) = 1.70 GPa, δ = a²/R = 28.1 µm.
