@@ -566,6 +566,7 @@ struct Mechanics::Impl {
     double best_norm = Rs.norm();
     int misses = 0;                    // consecutive steps without descent
     double previous_norm = 0;          // |R − (1 − s) R_0|₂ before the last step
+    double previous_correction = 0;    // m, ∞-norm of the last full Newton step (0: none or damped)
     for (int it = 1; it <= max_iterations; ++it) {
       ++report.iterations;
       // Linear tolerance η (relative), after Eisenstat and Walker (SIAM J. Sci.
@@ -641,6 +642,17 @@ struct Mechanics::Impl {
                      norm, alpha, correction);
       if (norm <= tolerance || (correction <= settings.displacement_tolerance && norm <= 1e3 * tolerance))
         return Outcome::converged;
+      // Error estimate of the converging iteration (Deuflhard, Newton Methods for
+      // Nonlinear Problems, Springer 2004, §2.1): once two full steps in a row contract
+      // superlinearly, the next correction, about |Δu_k|² / |Δu_k−1|, bounds the
+      // iterate's remaining error. Below settings.error_estimate_tolerance the step is
+      // accepted without the iteration that would only confirm it, while the residual
+      // is within 10² of its tolerance.
+      if (alpha == 1.0 && previous_correction > 0 && correction < 0.1 * previous_correction &&
+          correction * correction / previous_correction <= settings.error_estimate_tolerance &&
+          norm <= 1e2 * tolerance)
+        return Outcome::converged;
+      previous_correction = alpha == 1.0 ? correction : 0.0;
     }
     return Outcome::out_of_iterations;
   }

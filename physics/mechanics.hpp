@@ -83,6 +83,10 @@ struct MechanicsSettings {
   int max_continuation_iterations = 200;  // over all targets of a step's continuation
   double residual_tolerance = 1e-7;       // relative to the load scale
   double displacement_tolerance = 1e-13;  // m, on the Newton correction
+  // m: a step is also accepted when the estimated remaining error |Δu_k|²/|Δu_k−1| of
+  // a superlinearly converging iteration is below this and |R| within 10² of the
+  // residual tolerance (0 turns the estimate off).
+  double error_estimate_tolerance = 1e-10;
   int n_gauss = 2;
   bool verbose = false;                   // print Newton iterations to stderr (also RSW_VERBOSE=1)
   // Supports: u_z = 0 on `fixed_boundary`; the nodes of `loaded_boundary` share one
