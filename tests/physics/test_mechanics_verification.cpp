@@ -13,8 +13,27 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
 
 using namespace rsw;
+
+namespace {
+// One force-free step of a block heated uniformly by dT from 20 °C: the bottom held in
+// z, the top kept plane (the loaded end face, force 0), no radial clamping; committed.
+std::unique_ptr<physics::Mechanics> heated_block(const fem::Mesh& mesh, const std::string& body,
+                                                 const materials::Material& mat, double dT) {
+  physics::MechanicsSettings s;
+  s.fixed_boundary = body + ".bottom";
+  s.loaded_boundary = body + ".top";
+  s.clamp_radially = false;
+  s.friction_coefficient = 0;
+  auto mech = std::make_unique<physics::Mechanics>(mesh, std::vector<const materials::Material*>{&mat}, s, 20.0);
+  const auto report = mech->solve_force_step(0.0, Eigen::VectorXd::Constant(mesh.n_nodes(), 20.0 + dT));
+  EXPECT_TRUE(report.converged) << report.message;
+  mech->commit();
+  return mech;
+}
+}  // namespace
 
 // A disc with a hanging-node corner heated uniformly by 100 K expands freely:
 // u = ε_th x with ε_th = α ΔT, and the stress vanishes.
@@ -24,24 +43,15 @@ TEST(MechanicsVerification, FreeThermalExpansionIsStressFreeOnHangingNodeMesh) {
   const fem::Mesh mesh = test::block_mesh("disc", 0, 2e-3, 0, 1e-3, 0.25e-3, 2,
                                           [](const fem::IndexBox& b) { return b.x0 < 2 && b.y0 < 2; });
   ASSERT_GT(mesh.hanging_nodes.size(), 0u);
-  physics::MechanicsSettings s;
-  s.fixed_boundary = "disc.bottom";
-  s.loaded_boundary = "disc.top";
-  s.clamp_radially = false;
-  s.friction_coefficient = 0;
-  physics::Mechanics mech(mesh, {&mat}, s, 20.0);
-  const Eigen::VectorXd T = Eigen::VectorXd::Constant(mesh.n_nodes(), 20.0 + dT);
-  const auto report = mech.solve_force_step(0.0, T);
-  ASSERT_TRUE(report.converged) << report.message;
-  mech.commit();
+  const auto mech = heated_block(mesh, "disc", mat, dT);
   const double eps = alpha * dT;
-  const Eigen::VectorXd u = mech.displacement();
+  const Eigen::VectorXd u = mech->displacement();
   double worst_u = 0, worst_s = 0;
   for (int n = 0; n < mesh.n_nodes(); ++n) {
     worst_u = std::max(worst_u, std::abs(u[2 * n] - eps * mesh.nodes[n].x()));
     worst_u = std::max(worst_u, std::abs(u[2 * n + 1] - eps * mesh.nodes[n].y()));
   }
-  for (const auto& p : mech.point_stresses()) worst_s = std::max(worst_s, p.stress.lpNorm<Eigen::Infinity>());
+  for (const auto& p : mech->point_stresses()) worst_s = std::max(worst_s, p.stress.lpNorm<Eigen::Infinity>());
   std::printf("free expansion: eps_th = %.3e, max |u - eps x| = %.2e m, max |sigma| = %.2e Pa (E eps = %.2e Pa)\n", eps,
               worst_u, worst_s, 210e9 * eps);
   EXPECT_LT(worst_u, 1e-9 * eps * 2e-3 + 1e-15);
@@ -110,23 +120,14 @@ TEST(MechanicsVerification, ConfinedHeatedCoreGrowsAxiallyByItsVolumetricExpansi
       [](double, double, fem::Side s) -> std::string {
         return s == fem::Side::bottom ? "bottom" : s == fem::Side::top ? "top" : "axis";
       });
-  physics::MechanicsSettings s;
-  s.fixed_boundary = "core.bottom";
-  s.loaded_boundary = "core.top";
-  s.clamp_radially = false;
-  s.friction_coefficient = 0;
-  physics::Mechanics mech(mesh, {&mat}, s, 20.0);
-  const Eigen::VectorXd T = Eigen::VectorXd::Constant(mesh.n_nodes(), 20.0 + dT);
-  const auto report = mech.solve_force_step(0.0, T);
-  ASSERT_TRUE(report.converged) << report.message;
-  mech.commit();
+  const auto mech = heated_block(mesh, "core", mat, dT);
 
   const double K = E / (3 * (1 - 2 * nu));
   const double eps_free = alpha * dT, eps_elastic = alpha * dT * (1 + nu) / (1 - nu);
   const double eps_yielded = 3 * alpha * dT - 2 * sigma_y / (3 * K);
-  const double eps_fe = mech.end_face_displacement() / H;
+  const double eps_fe = mech->end_face_displacement() / H;
   double worst_s = 0;
-  for (const auto& p : mech.point_stresses())
+  for (const auto& p : mech->point_stresses())
     worst_s = std::max({worst_s, std::abs(p.stress[0] + sigma_y), std::abs(p.stress[2] + sigma_y),
                         std::abs(p.stress[1])});
   std::printf("confined heated core: axial strain %.6e (closed form %.6e; free %.3e, elastic confinement %.3e), "
