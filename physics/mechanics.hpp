@@ -47,7 +47,7 @@
 // two, so the tangent stays continuous. ε_T = 0.1 ε_N by default: the elastic slip
 // before sliding, μp/ε_T, is about 40 nm at μp = 150 MPa on the paper's mesh (Abaqus/
 // Standard's default penalty friction allows 0.5 % of a contact face's length, 0.3 µm
-// there). ε_T = ε_N (4 nm) gave the same weld to 0.1 % with 35 % more Newton
+// there). ε_T = ε_N (4 nm) gave the same weld to 0.2 % with 35 % more Newton
 // iterations, spent on points switching between stick and slip. Points where the
 // sheets have fused (set_bonded) are tied instead.
 #pragma once

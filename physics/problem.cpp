@@ -254,7 +254,7 @@ ConfigSchema build_schema() {
       .doc("Stick stiffness of the regularised Coulomb friction relative to the normal penalty: "
            "eps_T = ratio * eps_N. A contact point slides once its elastic slip reaches about mu p / eps_T "
            "(40 nm at 150 MPa of friction stress on the paper's mesh with 0.1). Stiffer sticking (1) gives the "
-           "same welds to 0.1 % with a third more Newton iterations (docs/PERFORMANCE.md).");
+           "same welds to 0.2 % with a third more Newton iterations (docs/PERFORMANCE.md).");
   s.number("solver.contact_smoothing", "m", "um").default_value("1 um")
       .range(Range::closed(0, 10))
       .doc("Width of the quadratic start of the C1 penalty contact law: contact stiffens over this much "
