@@ -5,6 +5,7 @@
 #include <Eigen/KLUSupport>
 #include <Eigen/UmfPackSupport>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -98,6 +99,21 @@ Eigen::VectorXd LinearSolver::solve(const Eigen::VectorXd& b) const {
 Eigen::VectorXd LinearSolver::solve(const SparseMatrix& A, const Eigen::VectorXd& b) {
   factorize(A);
   return solve(b);
+}
+
+double componentwise_backward_error(const SparseMatrix& A, const Eigen::VectorXd& x, const Eigen::VectorXd& b) {
+  if (A.rows() != b.size() || A.cols() != x.size())
+    throw std::invalid_argument("componentwise_backward_error: sizes of A, x and b do not match");
+  Eigen::VectorXd residual = b, scale = b.cwiseAbs();
+  for (Eigen::Index j = 0; j < A.outerSize(); ++j)
+    for (SparseMatrix::InnerIterator it(A, j); it; ++it) {
+      residual[it.row()] -= it.value() * x[j];
+      scale[it.row()] += std::abs(it.value() * x[j]);
+    }
+  double omega = 0;  // |r_i| <= scale_i, so a row with scale_i = 0 has r_i = 0
+  for (Eigen::Index i = 0; i < b.size(); ++i)
+    if (residual[i] != 0) omega = std::max(omega, std::abs(residual[i]) / scale[i]);
+  return omega;
 }
 
 struct PreconditionedGmres::Impl {

@@ -80,18 +80,19 @@ void Mesh::append(const Mesh& other) {
   for (const auto& [name, pair] : other.interfaces) interfaces[name] = pair;
 }
 
-double scaled_jacobian(const Mesh& mesh, int cell) {
-  const auto& c = mesh.cells[cell];
+double scaled_jacobian(const std::vector<Point>& positions, const std::array<int, 4>& cell) {
   double worst = 1.0;
   for (int k = 0; k < 4; ++k) {
-    const Point& p = mesh.nodes[c[k]];
-    const Point e_next = mesh.nodes[c[(k + 1) % 4]] - p;
-    const Point e_prev = mesh.nodes[c[(k + 3) % 4]] - p;
+    const Point& p = positions[cell[k]];
+    const Point e_next = positions[cell[(k + 1) % 4]] - p;
+    const Point e_prev = positions[cell[(k + 3) % 4]] - p;
     const double cross = e_next.x() * e_prev.y() - e_next.y() * e_prev.x();
     worst = std::min(worst, cross / (e_next.norm() * e_prev.norm()));
   }
   return worst;
 }
+
+double scaled_jacobian(const Mesh& mesh, int cell) { return scaled_jacobian(mesh.nodes, mesh.cells[cell]); }
 
 MeshStats mesh_stats(const Mesh& mesh, int body) {
   MeshStats s;

@@ -83,6 +83,10 @@ struct MeshStats {
 // Scaled Jacobian of a cell: the minimum over its corners of
 // cross(e_next, e_prev) / (|e_next| |e_prev|), i.e. the sine of the corner angle.
 double scaled_jacobian(const Mesh& mesh, int cell);
+// The same for a cell whose nodes sit at `positions` (e.g. a deformed configuration;
+// one entry per mesh node). A value ≤ 0 means a folded corner: the bilinear map is no
+// longer one-to-one, even where its quadrature-point Jacobians stay positive.
+double scaled_jacobian(const std::vector<Point>& positions, const std::array<int, 4>& cell);
 
 // Statistics over the cells of one body (body >= 0) or of the whole mesh (body < 0).
 MeshStats mesh_stats(const Mesh& mesh, int body = -1);

@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <numeric>
 #include <stdexcept>
 
@@ -25,6 +26,9 @@ using Matrix4 = Eigen::Matrix<double, 4, 4>;
 // R and the powers agree with a direct solve to about this (measured 4·10⁻¹² on the
 // default case, docs/PERFORMANCE.md).
 constexpr double linear_tolerance = 1e-10;
+// Componentwise backward error (fem::componentwise_backward_error) accepted when the
+// relative residual cannot reach linear_tolerance: 10⁴ unit round-offs.
+constexpr double backward_error_tolerance = 1e-12;
 
 int find_root(std::vector<int>& parent, int i) {
   while (parent[i] != i) i = parent[i] = parent[parent[i]];
@@ -355,13 +359,22 @@ const ElectricalSolution& Electrical::solve(const std::vector<fem::Point>& posit
   Eigen::VectorXd reduced;
   try {
     m.solver.solve_refreshing(m.K, m.F, reduced, linear_tolerance, /*refresh_after=*/6, /*max_iterations=*/30);
-  } catch (const std::runtime_error&) {
-    // Even a fresh factorisation stalls above the tolerance: K is too ill-conditioned
-    // for it in double precision. The iterate then is at least as accurate as the
-    // direct solve (GMRES with an exact preconditioner starts from it), and is taken
-    // unless it is far off.
-    const double relative = (m.F - m.K * reduced).norm() / m.F.norm();
-    if (!(relative <= 1e-6)) throw;
+  } catch (const std::runtime_error& e) {
+    // Even a fresh factorisation stalls above the tolerance: the entries of K span too
+    // many decades for a relative residual of 10⁻¹⁰ in double precision (a badly
+    // sheared cell next to the S/S contact edge, bonded points conducting 10³ times
+    // the bulk beside a very resistive film). The iterate is then taken if it is as
+    // accurate as a backward-stable direct solve of this K can be: its componentwise
+    // backward error is within backward_error_tolerance (2–3·10⁻¹⁶ measured where the
+    // relative residual stalled at 10⁻⁷–10⁻⁶). How well K itself represents the field
+    // is another matter: a cell that folds fails the run (physics/weld_simulation).
+    const double omega = fem::componentwise_backward_error(m.K, reduced, m.F);
+    if (!(omega <= backward_error_tolerance)) {
+      char text[128];
+      std::snprintf(text, sizeof text, "; componentwise backward error %.3g, above %.0e", omega,
+                    backward_error_tolerance);
+      throw std::runtime_error(e.what() + std::string(text));
+    }
   }
   const Eigen::VectorXd unit = m.constraints.distribute(reduced);
 

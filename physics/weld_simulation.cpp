@@ -193,6 +193,38 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
     return result;
   };
 
+  // The deformed mesh's worst cell (RunResult::worst_cell), checked after every
+  // committed mechanics step. The mesh is Lagrangian and never remeshed: where the
+  // material flows far (molten metal pressed out at the edge of the sheet/sheet
+  // contact) a cell can fold over a corner while its quadrature-point Jacobians stay
+  // positive, and the fields on it are meaningless. Returns the failure message then.
+  auto check_cells = [&](double t) -> std::string {
+    const std::vector<fem::Point>& x = mech.positions();
+    int worst = -1;
+    double value = 2;
+    for (int e = 0; e < mesh.n_cells(); ++e)
+      if (const double q = fem::scaled_jacobian(x, mesh.cells[e]); q < value) {
+        value = q;
+        worst = e;
+      }
+    if (worst < 0 || !(value < result.worst_cell.scaled_jacobian || result.worst_cell.cell < 0)) return {};
+    auto& w = result.worst_cell;
+    w.scaled_jacobian = value;
+    w.time = t;
+    w.cell = worst;
+    w.body = mesh.body_names[mesh.cell_body[worst]];
+    w.centre.setZero();
+    for (int n : mesh.cells[worst]) w.centre += 0.25 * x[n];
+    if (value > 0) return {};
+    char text[320];
+    std::snprintf(text, sizeof text,
+                  "the deformed mesh has folded: cell %d of %s at (r, z) = (%.3f, %.3f) mm has a corner with scaled "
+                  "Jacobian %.3f (<= 0); the material there has moved further than the fixed mesh can follow "
+                  "(see docs/MODEL.md, Known limitations)",
+                  worst, w.body.c_str(), w.centre.x() * 1e3, w.centre.y() * 1e3, value);
+    return text;
+  };
+
   // 1. Squeeze.
   if (progress) progress({"squeeze", 0, 0, 0.0});
   clock.start("squeeze");
@@ -207,6 +239,7 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
   }
   for (const auto& s : squeeze_result.steps) result.n_newton_iterations += s.iterations;
   if (!squeeze_result.converged) return fail("squeeze: " + squeeze_result.message);
+  if (const std::string tangled = check_cells(0.0); !tangled.empty()) return fail("squeeze: " + tangled);
   result.squeeze_displacement = mech.end_face_displacement();
   for (const auto& st : mech.interface_states()) {
     result.squeeze_contact_radius.emplace_back(st.name, st.contact_radius);
@@ -618,6 +651,8 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
                                     std::to_string(loose_residual) + " N (" + loose_message + ")");
       }
       thermal.commit();
+      if (const std::string tangled = check_cells(t); !tangled.empty())
+        return fail("weld stage, step " + std::to_string(k) + " (t = " + std::to_string(t * 1e3) + " ms): " + tangled);
 
       if (std::abs(t - current_end) < 1e-12)
         nugget_energy_fraction = nugget_enthalpy(mesh, mech.positions(), thermal.committed_temperature(),
@@ -706,6 +741,11 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
     h5.set_attribute("/run", "wall_time", std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count());
     h5.set_attribute("/run", "squeeze_indentation", result.squeeze_indentation);
     h5.set_attribute("/run", "electrode_melting_time", result.electrode_melting_time);
+    h5.set_attribute("/run", "worst_cell_scaled_jacobian", result.worst_cell.scaled_jacobian);
+    h5.set_attribute("/run", "worst_cell_time", result.worst_cell.time);
+    h5.set_attribute("/run", "worst_cell_body", result.worst_cell.body);
+    h5.set_attribute("/run", "worst_cell_r", result.worst_cell.centre.x());
+    h5.set_attribute("/run", "worst_cell_z", result.worst_cell.centre.y());
     std::string warnings;
     for (const auto& w : result.warnings) warnings += (warnings.empty() ? "" : "\n") + w;
     h5.set_attribute("/run", "warnings", warnings);
@@ -745,6 +785,12 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
     for (const auto& [name, p] : result.squeeze_peak_pressure) j["squeeze"]["peak_pressure_Pa"][name] = p;
     j["warnings"] = result.warnings;
     if (!std::isnan(result.electrode_melting_time)) j["electrode_melting_time_s"] = result.electrode_melting_time;
+    j["worst_cell"] = {{"scaled_jacobian", result.worst_cell.scaled_jacobian},
+                       {"time_s", result.worst_cell.time},
+                       {"cell", result.worst_cell.cell},
+                       {"body", result.worst_cell.body},
+                       {"r_m", result.worst_cell.centre.x()},
+                       {"z_m", result.worst_cell.centre.y()}};
     j["config_yaml"] = problem.resolved_config;
     std::ofstream(partial / "summary.json") << j.dump(2) << "\n";
   }

@@ -24,6 +24,7 @@
 //                 key results
 #pragma once
 
+#include "fem/mesh.hpp"
 #include "physics/problem.hpp"
 
 #include <filesystem>
@@ -74,6 +75,18 @@ struct RunResult {
   // solver.electrode_melting = continue), in the order they arose.
   std::vector<std::string> warnings;
   double electrode_melting_time = std::nan("");  // s, first step with an electrode node at its solidus
+  // The worst cell shape of the deformed mesh over the run (squeeze and weld stage):
+  // the least corner scaled Jacobian (fem::scaled_jacobian: 1 for a rectangle, 0.87
+  // for the 60° corners of the electrode flanks), the weld-stage time it was reached
+  // (0: the squeeze), the cell, its body and its centre then. A value ≤ 0 (a folded
+  // cell) fails the run.
+  struct WorstCell {
+    double scaled_jacobian = 1;
+    double time = 0;  // s
+    int cell = -1;
+    std::string body;
+    fem::Point centre = fem::Point::Zero();  // m
+  } worst_cell;
 };
 
 struct Progress {

@@ -8,8 +8,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 using namespace rsw;
 
@@ -134,3 +138,66 @@ TEST(LinearSolver, SingularMatrixIsReported) {
   fem::LinearSolver solver(fem::SolverKind::cholmod);
   EXPECT_THROW(solver.factorize(A), std::runtime_error);
 }
+
+// ω = max_i |b − A x|_i / (|A||x| + |b|)_i for A = [[2, 1], [1, 3]], b = (3, 4) and
+// x = (1 + δ, 1): r = (−2δ, −δ), |A||x| + |b| = (6 + 2δ, 8 + δ), so ω = 2δ/(6 + 2δ).
+// Scaling a row of A and of b by 10¹² leaves ω as it is (the relative residual of
+// such a system is dominated by the large rows; see the chain below).
+TEST(LinearSolver, BackwardErrorIsOettliPragerAndBlindToRowScaling) {
+  const double delta = 1e-3;
+  fem::SparseMatrix A(2, 2);
+  A.insert(0, 0) = 2;
+  A.insert(0, 1) = 1;
+  A.insert(1, 0) = 1;
+  A.insert(1, 1) = 3;
+  A.makeCompressed();
+  const Eigen::Vector2d b(3, 4), x(1 + delta, 1);
+  EXPECT_NEAR(fem::componentwise_backward_error(A, x, b), 2 * delta / (6 + 2 * delta), 1e-15);
+  EXPECT_EQ(fem::componentwise_backward_error(A, Eigen::Vector2d(1, 1), b), 0.0);
+  fem::SparseMatrix scaled = A;
+  scaled.coeffRef(0, 0) *= 1e12;
+  scaled.coeffRef(0, 1) *= 1e12;
+  const Eigen::Vector2d b_scaled(3e12, 4);
+  EXPECT_NEAR(fem::componentwise_backward_error(scaled, x, b_scaled), 2 * delta / (6 + 2 * delta), 1e-15);
+  // |r_i| <= (|A||x| + |b|)_i always, so ω <= 1, with 1 for x = 0 (nothing explained).
+  EXPECT_EQ(fem::componentwise_backward_error(A, Eigen::Vector2d::Zero(), b), 1.0);
+}
+
+// A chain of n conductors alternating 10¹⁴ and 1 S, grounded at one end, with 1 A
+// into the other: entries spanning 10¹⁴. CHOLMOD's solution is the closed form to
+// round-off, yet its relative residual |b − A x|/|b| is of order 1 (the rounding of
+// φ ≈ 100 V in rows of 10¹⁴ S); its componentwise backward error is round-off
+// (Cholesky is backward stable). That is why the electrical solve judges a stalled
+// GMRES by the backward error.
+TEST(LinearSolver, DirectSolveOfWildlyScaledChainHasRoundOffBackwardError) {
+  const int n = 200;
+  std::vector<Eigen::Triplet<double>> t;
+  auto g = [](int k) { return k % 2 == 0 ? 1e14 : 1.0; };  // conductor k joins nodes k−1 and k
+  for (int k = 0; k < n; ++k) {
+    // node k (unknown) sits between conductor k (to node k−1, node −1 grounded) and k+1
+    t.emplace_back(k, k, g(k) + (k + 1 < n ? g(k + 1) : 0.0));
+    if (k + 1 < n) {
+      t.emplace_back(k, k + 1, -g(k + 1));
+      t.emplace_back(k + 1, k, -g(k + 1));
+    }
+  }
+  fem::SparseMatrix A(n, n);
+  A.setFromTriplets(t.begin(), t.end());
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(n);
+  b[n - 1] = 1.0;
+  fem::LinearSolver solver(fem::SolverKind::cholmod);
+  const Eigen::VectorXd x = solver.solve(A, b);
+  // Closed form: the current 1 A flows through every conductor, so φ_k = Σ_{j≤k} 1/g(j).
+  double phi = 0, worst = 0;
+  for (int k = 0; k < n; ++k) {
+    phi += 1 / g(k);
+    worst = std::max(worst, std::abs(x[k] - phi) / phi);
+  }
+  const double omega = fem::componentwise_backward_error(A, x, b);
+  std::printf("chain: relative residual %.3e, backward error %.3e, worst relative error of phi %.3e\n",
+              (b - A * x).norm() / b.norm(), omega, worst);
+  EXPECT_LT(omega, 1e-14);
+  EXPECT_LT(worst, 1e-12);
+  EXPECT_GT((b - A * x).norm() / b.norm(), 1e-6);
+}
+

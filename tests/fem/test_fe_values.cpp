@@ -71,6 +71,24 @@ TEST(CellValues, InvertedCellIsReportedByNumber) {
   }
 }
 
+// The unit square with its third corner pulled in to (0.45, 0.45), past the diagonal:
+// an arrowhead whose bilinear map folds over that corner. Corner cross products
+// (e_next × e_prev) are 1, 0.45, −0.10, 0.45; det J is linear in (ξ, η) with those
+// corner values over 4, so at the 2×2 Gauss points it is positive (the one nearest
+// the fold: (0.0447·1 + 0.1667·0.9 − 0.622·0.10)/4 > 0) and the quadrature does not
+// notice. The scaled Jacobian does: −0.10/|(−0.45, 0.55)|² = −0.198.
+TEST(CellValues, FoldedCornerPassesTheQuadraturePointsButNotTheScaledJacobian) {
+  const fem::Mesh m = one_cell({fem::Point(0, 0), fem::Point(1, 0), fem::Point(0.45, 0.45), fem::Point(0, 1)});
+  fem::CellValues fv(2, fem::CoordinateSystem::planar);
+  EXPECT_NO_THROW(fv.reinit(m, 0));
+  EXPECT_NEAR(fem::scaled_jacobian(m, 0), -0.10 / 0.505, 1e-14);
+  EXPECT_NEAR(fem::scaled_jacobian(m.nodes, m.cells[0]), -0.10 / 0.505, 1e-14);
+  // The same cell convex again (corner at (0.55, 0.55)): +0.10/0.505.
+  std::vector<fem::Point> moved = m.nodes;
+  moved[2] = fem::Point(0.55, 0.55);
+  EXPECT_NEAR(fem::scaled_jacobian(moved, m.cells[0]), 0.10 / 0.505, 1e-14);
+}
+
 TEST(AxisymmetricMeasure, CylinderVolumeAndSurfaceAreExact) {
   // Cylinder R = 2, H = 3 on a refined quadtree: V = π R^2 H, lateral area 2π R H.
   fem::Quadtree tree(4, 6);

@@ -35,6 +35,12 @@ int run_rsw(const std::string& args, std::string& output) {
   return WEXITSTATUS(pclose(pipe.release()));
 }
 
+// The reason a failed run wrote into its partial folder (run folder + ".partial").
+std::string failure_reason(const fs::path& dir) {
+  std::ifstream in(fs::path(dir.string() + ".partial") / "failure.txt");
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
 // Columns of a CSV with a header row ("name [unit]"); lines starting with # skipped.
 std::map<std::string, std::vector<double>> read_csv(const fs::path& path) {
   std::ifstream in(path);
@@ -195,10 +201,41 @@ TEST(WeldRun, FailureAfterElectrodeMeltingSaysWhenTheElectrodeMelted) {
                         " --set contact.electrode_sheet.film_thickness=0.3mm --set solver.friction_penalty_ratio=1",
                     out),
             0);
-  std::ifstream in(fs::path(dir.string() + ".partial") / "failure.txt");
-  std::string failure((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string failure = failure_reason(dir);
   EXPECT_NE(failure.find("after an electrode had melted, at t = "), std::string::npos) << failure;
   EXPECT_NE(out.find("after an electrode had melted, at t = "), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir / "summary.json"));
+  fs::remove_all(dir);
+  fs::remove_all(dir.string() + ".partial");
+}
+
+// A very resistive S/S film (run 76 of the paper-mesh Table I study: t_f,S/S = 5.6·10⁻⁵ m,
+// ρ_c,S/S = 1.8·10⁻⁵ Ω·m) melts the sheets first at the edge of their contact, and the
+// top cell of sheet_2 there, 62.5 µm on the paper's mesh, is sheared until one corner
+// folds (its scaled Jacobian passes 0 at 21 ms) while its quadrature-point Jacobians
+// stay positive. Without the check the run went on to 75 ms on the folded cell, whose
+// conductance entries grew to 10¹³ times the others'. The run must fail there, saying
+// where and when, and leave no summary that looks valid. (~15 s: the paper's mesh; the
+// coarse mesh's 125 µm cells do not fold.)
+TEST(WeldRun, FoldedCellFailsTheRunSayingWhereAndWhen) {
+  const fs::path dir = fs::temp_directory_path() / ("rsw_folded_" + std::to_string(::getpid()));
+  std::string out;
+  EXPECT_NE(run_rsw("simulate " + paper_case + " -q -o " + dir.string() +
+                        " --set output.fields=false"
+                        " --set contact.sheet_sheet.film_thickness=5.6475400103189882e-05m"
+                        " --set \"contact.sheet_sheet.coating_resistivity=1.8492459486106656e-05 ohm*m\""
+                        " --set contact.electrode_sheet.film_thickness=2.5620235367893057e-07m"
+                        " --set \"contact.electrode_sheet.coating_resistivity=5.9803569934488761e-07 ohm*m\""
+                        " --set contact.electrode_sheet.htc_p1=0.0044651318755885372"
+                        " --set contact.sheet_sheet.htc_p1=0.0044651318755885372"
+                        " --set \"thermal.melt_conductivity=86.956956302646873 W/(m*K)\"",
+                    out),
+            0);
+  const std::string failure = failure_reason(dir);
+  EXPECT_NE(failure.find("the deformed mesh has folded: cell"), std::string::npos) << failure;
+  EXPECT_NE(failure.find("of sheet_2 at (r, z) = (1.3"), std::string::npos) << failure;
+  EXPECT_NE(failure.find("weld stage, step 2"), std::string::npos) << failure;  // 20–29 ms
+  EXPECT_NE(out.find("the deformed mesh has folded"), std::string::npos) << out;
   EXPECT_FALSE(fs::exists(dir / "summary.json"));
   fs::remove_all(dir);
   fs::remove_all(dir.string() + ".partial");
