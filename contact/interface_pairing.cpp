@@ -17,12 +17,12 @@ Eigen::Vector2d outward_normal(const fem::Point& a, const fem::Point& b) {
 }  // namespace
 
 InterfacePairing::InterfacePairing(const fem::Mesh& mesh, const std::string& name, int n_gauss,
-                                   double search_margin)
+                                   double search_margin, bool mirrored)
     : mesh_(mesh), name_(name), n_gauss_(n_gauss) {
   auto it = mesh.interfaces.find(name);
   if (it == mesh.interfaces.end()) throw std::out_of_range("unknown interface '" + name + "'");
-  slave_ = it->second.first;
-  master_ = it->second.second;
+  slave_ = mirrored ? it->second.second : it->second.first;
+  master_ = mirrored ? it->second.first : it->second.second;
   for (const auto& f : mesh.boundary(slave_)) slave_faces_.push_back(mesh.face_nodes(f));
   for (const auto& f : mesh.boundary(master_)) master_faces_.push_back(mesh.face_nodes(f));
 

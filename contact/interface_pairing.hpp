@@ -55,8 +55,10 @@ struct ContactPoint {
 
 class InterfacePairing {
  public:
+  // `mirrored`: the interface's second boundary is the slave and its first the master
+  // (the second pass of a two-pass contact treatment; physics/mechanics).
   InterfacePairing(const fem::Mesh& mesh, const std::string& name, int n_gauss = 2,
-                   double search_margin = 0.5e-3);
+                   double search_margin = 0.5e-3, bool mirrored = false);
 
   const std::string& name() const { return name_; }
   const std::string& slave_boundary() const { return slave_; }

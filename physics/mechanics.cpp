@@ -5,6 +5,7 @@
 #include "fem/fe_values.hpp"
 
 #include <algorithm>
+#include <numeric>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -43,9 +44,23 @@ struct Mechanics::Impl {
   fem::DofMap dofs;
   int w_dof;
   fem::Constraints force_constraints, displacement_constraints;
-  std::vector<contact::InterfacePairing> pairings;
-  std::vector<double> normal_penalty;  // per pairing, Pa/m
-  std::vector<std::pair<int, int>> groups;  // (pairing, slave face)
+  // Contact passes: q < pairings.size() the named pass of mesh interface q (in
+  // mesh.interfaces order), then the mirrored passes of the two-pass interfaces.
+  std::vector<contact::InterfacePairing> pairings, mirrors;
+  std::vector<int> mirror_of;          // per mirrored pass, its interface (pass index)
+  // Per mirrored pass and point: the two first-pass points bracketing it in reference
+  // r and the weight of the second, to hand it their bonding degree.
+  std::vector<std::vector<std::pair<std::array<int, 2>, double>>> mirror_source;
+  std::vector<double> normal_penalty;  // per pass, Pa/m
+  std::vector<double> area_weight;     // per pass: 1, or 1/2 for both passes of a two-pass interface
+  std::vector<std::pair<int, int>> groups;  // (pass, slave face)
+  int n_passes() const { return static_cast<int>(pairings.size() + mirrors.size()); }
+  const contact::InterfacePairing& pass(int q) const {
+    return q < static_cast<int>(pairings.size()) ? pairings[q] : mirrors[q - pairings.size()];
+  }
+  contact::InterfacePairing& pass(int q) {
+    return q < static_cast<int>(pairings.size()) ? pairings[q] : mirrors[q - pairings.size()];
+  }
   std::unique_ptr<fem::Assembler> force_assembler, displacement_assembler;
   fem::PreconditionedGmres force_gmres, displacement_gmres;
 
@@ -129,9 +144,14 @@ struct Mechanics::Impl {
     displacement_constraints.close();
 
     std::vector<std::vector<int>> dof_groups;
+    auto two_pass = [&](const std::string& name) {
+      return std::find(s.two_pass_interfaces.begin(), s.two_pass_interfaces.end(), name) !=
+             s.two_pass_interfaces.end();
+    };
+    for (const auto& name : s.two_pass_interfaces)
+      if (!mesh.interfaces.count(name)) throw std::out_of_range("two-pass contact: unknown interface '" + name + "'");
     for (const auto& [name, pair] : mesh.interfaces) {
       pairings.emplace_back(mesh, name, s.n_gauss);
-      const auto& pairing = pairings.back();
       // ε_N = factor · E / h: E of the stiffer side at room temperature, h the finest
       // face on the interface. Fixed for the run (it never depends on the parameters).
       const int b1 = mesh.cell_body[mesh.boundary(pair.first).front().cell];
@@ -145,9 +165,38 @@ struct Mechanics::Impl {
           h = std::min(h, (mesh.nodes[n[1]] - mesh.nodes[n[0]]).norm());
         }
       normal_penalty.push_back(s.penalty_factor * E / h);
-      const int p = static_cast<int>(pairings.size()) - 1;
+      area_weight.push_back(two_pass(name) ? 0.5 : 1.0);
+    }
+    for (std::size_t p = 0; p < pairings.size(); ++p) {
+      if (area_weight[p] == 1.0) continue;
+      mirrors.emplace_back(mesh, pairings[p].name(), s.n_gauss, 0.5e-3, /*mirrored=*/true);
+      mirror_of.push_back(static_cast<int>(p));
+      normal_penalty.push_back(normal_penalty[p]);
+      area_weight.push_back(0.5);
+      // Bracketing first-pass points of every mirrored point, in reference r.
+      const auto& primary = pairings[p].points();
+      std::vector<int> order(primary.size());
+      std::iota(order.begin(), order.end(), 0);
+      std::sort(order.begin(), order.end(), [&](int a, int b) {
+        return primary[a].reference_position.x() < primary[b].reference_position.x();
+      });
+      std::vector<std::pair<std::array<int, 2>, double>> source;
+      for (const auto& pt : mirrors.back().points()) {
+        const double r = pt.reference_position.x();
+        auto it = std::lower_bound(order.begin(), order.end(), r,
+                                   [&](int i, double v) { return primary[i].reference_position.x() < v; });
+        const int hi = it == order.end() ? order.back() : *it;
+        const int lo = it == order.begin() ? order.front() : *(it == order.end() ? it - 1 : (it - 1));
+        const double r_lo = primary[lo].reference_position.x(), r_hi = primary[hi].reference_position.x();
+        const double w = r_hi > r_lo ? std::clamp((r - r_lo) / (r_hi - r_lo), 0.0, 1.0) : 0.0;
+        source.push_back({{lo, hi}, w});
+      }
+      mirror_source.push_back(std::move(source));
+    }
+    for (int q = 0; q < n_passes(); ++q) {
+      const auto& pairing = pass(q);
       for (int f = 0; f < pairing.n_slave_faces(); ++f) {
-        groups.emplace_back(p, f);
+        groups.emplace_back(q, f);
         std::vector<int> g;
         for (int n : pairing.coupling_nodes(f)) {
           g.push_back(dofs.dof(n, 0));
@@ -352,8 +401,9 @@ struct Mechanics::Impl {
     using Vector8 = Eigen::Matrix<double, 8, 1>;
     using Matrix8 = Eigen::Matrix<double, 8, 8>;
     const auto [p, f] = groups[g];
-    const auto& pairing = pairings[p];
+    const auto& pairing = pass(p);
     const double eps_n = normal_penalty[p];
+    const double weight = area_weight[p];
     const double eps_t = settings.tangential_penalty_ratio * eps_n;
     const double mu = settings.friction_coefficient;
     // Local dof of entry i of an 8-vector over (slave 0, slave 1, master 0, master 1).
@@ -394,7 +444,8 @@ struct Mechanics::Impl {
           d -= tie.master_weights[s] * (current.nodes[tie.master_nodes[s]] + node_increment(tie.master_nodes[s]));
         const Eigen::Vector2d traction = eps_n * (tie.reference - d);  // on the slave side
         const double beta = tie.degree;
-        add(beta * pt.reference_area * B.transpose() * traction, beta * eps_n * pt.reference_area * B.transpose() * B);
+        const double A_tie = weight * pt.reference_area;
+        add(beta * A_tie * B.transpose() * traction, beta * eps_n * A_tie * B.transpose() * B);
         if (beta >= 1) continue;
       }
       // Contact and friction carry the share 1 − β of a partly bonded point.
@@ -416,7 +467,7 @@ struct Mechanics::Impl {
       }
       // Tractions act on the undeformed area: the surface stretch is small, and no area
       // derivative enters the tangent.
-      const double A = pt.reference_area;
+      const double A = weight * pt.reference_area;
       const auto [pressure, k_n] = penalty_pressure(pt.gap, eps_n, settings.contact_smoothing);
       Vector8 force = pressure * A * Nv;                        // contact force on both sides
       Matrix8 stiffness = k_n * A * Nv * Nv.transpose();        // -∂f/∂u
@@ -471,8 +522,8 @@ struct Mechanics::Impl {
   // Reduced residual (and tangent) at the current increment.
   void evaluate(Control ctrl, fem::SparseMatrix& K, Eigen::VectorXd& R, bool matrix) {
     const std::vector<fem::Point> x = trial_positions();
-    for (auto& pairing : pairings)
-      if (!pairing.update(x)) pairing_within = false;
+    for (int q = 0; q < n_passes(); ++q)
+      if (!pass(q).update(x)) pairing_within = false;
     const fem::Assembler& assembler = ctrl == Control::force ? *force_assembler : *displacement_assembler;
     fem::Assembler::Terms terms;
     if (!skip_cells) terms.cells = [this](int e, fem::LocalSystem& l) { cell_kernel(e, l); };
@@ -915,25 +966,37 @@ void Mechanics::set_bonded(const std::vector<std::vector<char>>& bonded) {
 
 void Mechanics::set_bonding_degree(const std::vector<std::vector<double>>& degree) {
   Impl& m = *impl_;
+  auto apply = [&m](int q, std::size_t i, double value) {
+    auto& tie = m.ties[q][i];
+    const auto& pt = m.pass(q).points()[i];
+    if (tie.on) tie.degree = std::max(tie.degree, std::min(1.0, value));
+    if (!(value > 0) || tie.on || !pt.paired) return;
+    tie.degree = std::min(1.0, value);
+    // Bond in the state reached, keeping the whole contact traction of that moment,
+    // p n − τ t (pressure and committed friction; the slave side's traction in
+    // group_kernel), so that the traction is continuous when the point bonds.
+    tie.on = true;
+    tie.master_nodes = pt.master_nodes;
+    tie.master_weights = pt.master_weights;
+    const Eigen::Vector2d x_m = pt.master_weights[0] * m.current.nodes[pt.master_nodes[0]] +
+                                pt.master_weights[1] * m.current.nodes[pt.master_nodes[1]];
+    const double pressure = penalty_pressure(pt.gap, m.normal_penalty[q], m.settings.contact_smoothing).pressure;
+    const double friction = m.tau[q][i];
+    tie.reference = (pt.position - x_m) + (pressure * pt.normal - friction * pt.tangent) / m.normal_penalty[q];
+  };
   for (std::size_t p = 0; p < m.pairings.size() && p < degree.size(); ++p)
-    for (std::size_t i = 0; i < m.pairings[p].points().size() && i < degree[p].size(); ++i) {
-      auto& tie = m.ties[p][i];
-      const auto& pt = m.pairings[p].points()[i];
-      if (tie.on) tie.degree = std::max(tie.degree, std::min(1.0, degree[p][i]));
-      if (!(degree[p][i] > 0) || tie.on || !pt.paired) continue;
-      tie.degree = std::min(1.0, degree[p][i]);
-      // Bond in the state reached, keeping the whole contact traction of that moment,
-      // p n − τ t (pressure and committed friction; the slave side's traction in
-      // group_kernel), so that the traction is continuous when the point bonds.
-      tie.on = true;
-      tie.master_nodes = pt.master_nodes;
-      tie.master_weights = pt.master_weights;
-      const Eigen::Vector2d x_m = pt.master_weights[0] * m.current.nodes[pt.master_nodes[0]] +
-                                  pt.master_weights[1] * m.current.nodes[pt.master_nodes[1]];
-      const double pressure = penalty_pressure(pt.gap, m.normal_penalty[p], m.settings.contact_smoothing).pressure;
-      const double friction = m.tau[p][i];
-      tie.reference = (pt.position - x_m) + (pressure * pt.normal - friction * pt.tangent) / m.normal_penalty[p];
+    for (std::size_t i = 0; i < m.pairings[p].points().size() && i < degree[p].size(); ++i)
+      apply(static_cast<int>(p), i, degree[p][i]);
+  // A mirrored pass takes the degree of the first-pass points it lies between.
+  for (std::size_t k = 0; k < m.mirrors.size(); ++k) {
+    const std::size_t p = static_cast<std::size_t>(m.mirror_of[k]);
+    if (p >= degree.size()) continue;
+    for (std::size_t i = 0; i < m.mirror_source[k].size(); ++i) {
+      const auto& [pair, w] = m.mirror_source[k][i];
+      if (static_cast<std::size_t>(std::max(pair[0], pair[1])) >= degree[p].size()) continue;
+      apply(static_cast<int>(m.pairings.size() + k), i, (1 - w) * degree[p][pair[0]] + w * degree[p][pair[1]]);
     }
+  }
 }
 
 std::vector<double> Mechanics::contact_pressure(int p) const {

@@ -74,6 +74,11 @@ struct MechanicsSettings {
   double penalty_factor = 10.0;           // ε_N = factor · E / h
   double tangential_penalty_ratio = 0.1;  // ε_T = ratio · ε_N (elastic slip before sliding μp/ε_T)
   double contact_smoothing = 1e-6;        // m, δ of the C¹ penalty law (see below)
+  // Interfaces treated in two passes (docs/MECHANICS.md, "Contact"): besides the
+  // named slave/master pass, a mirrored pass with the roles swapped, each pass with
+  // half the area weight, so that two sides of the same kind are loaded alike.
+  // pairings(), interface_states() and contact_pressure() show the first pass.
+  std::vector<std::string> two_pass_interfaces;
   // Seating aid: under displacement control, bodies with no support of their own
   // (the sheets) rest on an elastic foundation of this total stiffness (N/m) towards
   // their initial axial position, so that they are held before contact closes.

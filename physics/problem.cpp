@@ -255,6 +255,11 @@ ConfigSchema build_schema() {
            "eps_T = ratio * eps_N. A contact point slides once its elastic slip reaches about mu p / eps_T "
            "(40 nm at 150 MPa of friction stress on the paper's mesh with 0.1). Stiffer sticking (1) gives the "
            "same welds to 0.2 % with a third more Newton iterations (docs/PERFORMANCE.md).");
+  s.choice("solver.sheet_contact", {"two_pass", "one_pass"}).default_value("two_pass")
+      .doc("Treatment of the sheet/sheet contacts: one_pass keeps the upper sheet's points out of the "
+           "lower sheet (slave and master); two_pass adds the mirrored pass, each with half the area, so "
+           "that the two sheets of a symmetric stack deform alike where they part at the contact edge (one "
+           "pass shears the master sheet there until a cell folds; docs/MECHANICS.md).");
   s.number("solver.contact_smoothing", "m", "um").default_value("1 um")
       .range(Range::closed(0, 10))
       .doc("Width of the quadratic start of the C1 penalty contact law: contact stiffens over this much "
@@ -496,6 +501,7 @@ Problem make_problem(const Config& config) {
   solver.contact_penalty_factor = config.number("solver.contact_penalty_factor");
   solver.contact_smoothing = config.number("solver.contact_smoothing");
   solver.friction_penalty_ratio = config.number("solver.friction_penalty_ratio");
+  solver.two_pass_sheet_contact = config.text("solver.sheet_contact") == "two_pass";
   solver.stop_on_electrode_melting = config.text("solver.electrode_melting") == "stop";
   solver.coupling_tolerance = config.number("solver.coupling_tolerance");
   solver.max_coupling_iterations = config.integer("solver.max_coupling_iterations");

@@ -69,6 +69,7 @@ struct SolverSettings {
   double seat_step = 0;               // m, seating travel per step
   double contact_penalty_factor = 0;  // -, eps_N = factor * E / h
   double contact_smoothing = 0;       // m, delta of the C1 penalty law
+  bool two_pass_sheet_contact = true;  // solver.sheet_contact = two_pass
   double friction_penalty_ratio = 0;  // -, eps_T = ratio * eps_N (stick stiffness of the regularised friction)
   double coupling_tolerance = 0;      // K, electro-thermal fixed-point tolerance
   int max_coupling_iterations = 0;

@@ -176,6 +176,9 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
   ms.penalty_factor = problem.solver.contact_penalty_factor;
   ms.contact_smoothing = problem.solver.contact_smoothing;
   ms.tangential_penalty_ratio = problem.solver.friction_penalty_ratio;
+  if (problem.solver.two_pass_sheet_contact)
+    for (const auto& [name, pair] : mesh.interfaces)
+      if (name.rfind("ss_", 0) == 0) ms.two_pass_interfaces.push_back(name);
   Mechanics mech(mesh, body_materials, ms, problem.thermal.initial_temperature);
   const Eigen::VectorXd T = Eigen::VectorXd::Constant(mesh.n_nodes(), problem.thermal.initial_temperature);
 
