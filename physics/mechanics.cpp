@@ -5,11 +5,11 @@
 #include "fem/fe_values.hpp"
 
 #include <algorithm>
-#include <numeric>
 #include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <numeric>
 #include <stdexcept>
 
 namespace rsw::physics {
@@ -186,7 +186,7 @@ struct Mechanics::Impl {
         auto it = std::lower_bound(order.begin(), order.end(), r,
                                    [&](int i, double v) { return primary[i].reference_position.x() < v; });
         const int hi = it == order.end() ? order.back() : *it;
-        const int lo = it == order.begin() ? order.front() : *(it == order.end() ? it - 1 : (it - 1));
+        const int lo = it == order.begin() ? order.front() : *(it - 1);
         const double r_lo = primary[lo].reference_position.x(), r_hi = primary[hi].reference_position.x();
         const double w = r_hi > r_lo ? std::clamp((r - r_lo) / (r_hi - r_lo), 0.0, 1.0) : 0.0;
         source.push_back({{lo, hi}, w});
