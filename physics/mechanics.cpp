@@ -6,9 +6,11 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <numeric>
 #include <stdexcept>
 
@@ -218,6 +220,12 @@ struct Mechanics::Impl {
     coefficient_stamp.assign(mesh.n_cells(), 0);
     elastic_matrix.resize(mesh.n_cells());
     elastic_stamp.assign(mesh.n_cells(), 0);
+    linear_increment.resize(mesh.n_cells());
+    linear_force.resize(mesh.n_cells());
+    linear_reach.assign(mesh.n_cells(), -1.0);
+    linear_stamp.assign(mesh.n_cells(), 0);
+    linear_stale.assign(mesh.n_cells(), 0);
+    linear_updates = settings.linear_elastic_updates;
     cv.reinit(mesh, 0);
     for (int q = 0; q < n_q; ++q) shape.push_back({cv.N(q, 0), cv.N(q, 1), cv.N(q, 2), cv.N(q, 3)});
     strain.assign(n_points, Vector4::Zero());
@@ -260,6 +268,24 @@ struct Mechanics::Impl {
   // sheet) stay elastic. Bit for bit what the kernel would compute.
   std::vector<Eigen::Matrix<double, 8, 8>> elastic_matrix;
   std::vector<int> elastic_stamp;  // the coefficient generation of elastic_matrix[e]; 0: none
+  // Linear update of an elastic cell. Within a step an elastic cell's force is linear
+  // in its displacements: f_e(Δu) = f_e(Δu*) − K_e (Δu − Δu*), K_e = elastic_matrix[e],
+  // exact while every Gauss point stays elastic. Δu* is the increment of the cell's
+  // last full evaluation, where all its points were elastic with equivalent stress
+  // q*_q below the yield stress σ_y,q. A later increment keeps every point elastic if
+  //     sqrt(3/2) 2G_q |B̄_q (Δu − Δu*)| ≤ sqrt(3/2) 2G_q ‖B̄_q‖_F |Δu − Δu* − t| < 0.99 σ_y,q − q*_q
+  // (the deviatoric stress moves by 2G dev(B̄ δu); t the cell's mean axial
+  // translation, which B̄ maps to zero), a bound on |Δu − Δu* − t| kept per cell as
+  // linear_reach. Such a cell skips its Gauss points: its force and tangent are the
+  // linear update (the same to round-off), and its strains and stresses at the final
+  // increment are computed once, at commit() (linear_stale). Most cells of a step
+  // (the electrodes, the cold sheet) take this path after the step's first evaluation.
+  std::vector<Eigen::Matrix<double, 8, 1>> linear_increment, linear_force;  // Δu*_e, f_e(Δu*)
+  std::vector<double> linear_reach;  // m; < 0: none
+  std::vector<int> linear_stamp;     // the coefficient generation of the above; 0: none
+  std::vector<char> linear_stale;    // trial strains and stresses are those of Δu*, not Δu
+  bool linear_updates = true;        // settings (tests compare both paths)
+  std::atomic<long> linear_count{0};  // cell evaluations by linear update
   std::vector<std::array<double, 4>> shape;            // N_a at the Gauss points
   bool need_matrix = true;                             // evaluate(): tangent wanted
 
@@ -341,6 +367,19 @@ struct Mechanics::Impl {
     Eigen::Matrix<double, 8, 1> Fe = Eigen::Matrix<double, 8, 1>::Zero();
 
     const double kappa = control == Control::displacement ? foundation[mesh.cell_body[e]] : 0.0;
+    if (kappa == 0 && linear_stamp[e] == coefficient_generation && elastic_stamp[e] == coefficient_generation) {
+      const Eigen::Matrix<double, 8, 1> d = du - linear_increment[e];
+      const double mean_z = 0.25 * (d[1] + d[3] + d[5] + d[7]);
+      double distance = 0;
+      for (int a = 0; a < 4; ++a) distance += d[2 * a] * d[2 * a] + (d[2 * a + 1] - mean_z) * (d[2 * a + 1] - mean_z);
+      if (distance <= linear_reach[e] * linear_reach[e]) {
+        local.vector.noalias() += linear_force[e] - elastic_matrix[e] * d;
+        if (need_matrix) local.matrix += elastic_matrix[e];
+        linear_stale[e] = 1;
+        linear_count.fetch_add(1, std::memory_order_relaxed);
+        return;
+      }
+    }
     if (kappa > 0)  // seating foundation: body force -κ u_z towards the initial position
       for (int q = 0; q < n_q; ++q) {
         const double w = point_cache[k0 + q].JxW;
@@ -354,6 +393,7 @@ struct Mechanics::Impl {
 
     std::array<Matrix4, 9> tangent;  // per Gauss point (n_q ≤ 9)
     bool elastic = true;
+    double reach = std::numeric_limits<double>::infinity();  // m, see linear_reach
     for (int q = 0; q < n_q; ++q) {
       const std::size_t k = k0 + q;
       const PointCache& pc = point_cache[k];
@@ -370,6 +410,10 @@ struct Mechanics::Impl {
       trial_state[k] = result.state;
       trial_stress[k] = result.stress;
       elastic = elastic && !result.yielded;
+      if (elastic && linear_updates) {
+        const double scale = 1.2247448713915890 * 2 * pc.coefficients.moduli.shear_modulus * B_bar.norm();
+        reach = std::min(reach, (0.99 * pc.coefficients.initial.yield_stress - result.equivalent_stress) / scale);
+      }
       if (need_matrix) tangent[q] = result.tangent;
       Fe.noalias() -= pc.JxW * (B_bar.transpose() * result.stress);  // -∫ B̄ᵀ σ dV
     }
@@ -390,8 +434,45 @@ struct Mechanics::Impl {
         }
       }
     }
+    linear_stale[e] = 0;
+    if (elastic && linear_updates && kappa == 0 && reach > 0) {
+      linear_increment[e] = du;
+      linear_force[e] = Fe;
+      linear_reach[e] = reach;
+      linear_stamp[e] = coefficient_generation;
+    } else {
+      linear_stamp[e] = 0;
+    }
     local.matrix += Ke;
     local.vector += Fe;
+  }
+
+  // Strains and stresses at the current increment of the cells whose last evaluation
+  // was a linear update (see linear_reach): elastic by construction.
+  void refresh_linear_cells() {
+    for (int e = 0; e < mesh.n_cells(); ++e) {
+      if (!linear_stale[e]) continue;
+      const auto& c = mesh.cells[e];
+      const materials::Material& mat = *cell_material[e];
+      const std::size_t k0 = static_cast<std::size_t>(e) * n_q;
+      Eigen::Matrix<double, 8, 1> du;
+      for (int a = 0; a < 4; ++a) du.segment<2>(2 * a) = increment.segment<2>(2 * c[a]);
+      for (int q = 0; q < n_q; ++q) {
+        const std::size_t k = k0 + q;
+        const PointCache& pc = point_cache[k];
+        materials::J2Input in;
+        in.strain = strain[k] + pc.B_bar * du;
+        in.thermal_strain = pc.thermal_strain;
+        in.thermal_strain_slope = pc.thermal_strain_slope;
+        in.temperature = pc.temperature;
+        in.time_step = time_step;
+        const auto result = materials::j2_update(mat, state[k], in, pc.coefficients);
+        trial_strain[k] = in.strain;
+        trial_state[k] = result.state;
+        trial_stress[k] = result.stress;
+      }
+      linear_stale[e] = 0;
+    }
   }
 
   // Contact, friction and ties at the points of one slave face. Each point couples
@@ -851,6 +932,7 @@ void Mechanics::set_time_step(double seconds) {
 
 void Mechanics::commit() {
   Impl& m = *impl_;
+  m.refresh_linear_cells();
   m.strain = m.trial_strain;
   m.state = m.trial_state;
   m.tau = m.trial_tau;
@@ -937,6 +1019,8 @@ std::vector<double> Mechanics::equivalent_plastic_strain() const {
   }
   return out;
 }
+
+long Mechanics::linear_cell_updates() const { return impl_->linear_count.load(); }
 
 std::vector<PointStress> Mechanics::point_stresses() const {
   const Impl& m = *impl_;

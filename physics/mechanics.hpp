@@ -92,6 +92,11 @@ struct MechanicsSettings {
   // a superlinearly converging iteration is below this and |R| within 10² of the
   // residual tolerance (0 turns the estimate off).
   double error_estimate_tolerance = 1e-10;
+  // Cells whose Gauss points are elastic and provably stay so (a bound on the stress
+  // change from the displacement change since the cell's last full evaluation) take
+  // their force and tangent from the linear update f(Δu*) − K_e (Δu − Δu*) instead of
+  // their Gauss points; equal to round-off (false: every cell at its Gauss points).
+  bool linear_elastic_updates = true;
   int n_gauss = 2;
   bool verbose = false;                   // print Newton iterations to stderr (also RSW_VERBOSE=1)
   // Supports: u_z = 0 on `fixed_boundary`; the nodes of `loaded_boundary` share one
@@ -177,6 +182,9 @@ class Mechanics {
   std::vector<double> von_mises() const;
   std::vector<double> equivalent_plastic_strain() const;
   std::vector<PointStress> point_stresses() const;
+  // Cell evaluations so far that took the linear update of an elastic cell
+  // (MechanicsSettings::linear_elastic_updates) instead of their Gauss points.
+  long linear_cell_updates() const;
   double normal_penalty(const std::string& interface) const;
   // The contact pairings (one per mesh interface, in mesh.interfaces order), at the
   // last solved configuration, and the normal pressure at each of their points (Pa).

@@ -273,3 +273,69 @@ TEST(MechanicsVerification, ErrorEstimateStopsNewtonWithinItsToleranceOfTheConve
   EXPECT_LT(n_estimate, n_tight);
   EXPECT_LT(difference, 1e-9);
 }
+
+// Elastic cells that provably stay elastic take their force and tangent from the
+// linear update f(Δu*) − K_e (Δu − Δu*) instead of their Gauss points
+// (MechanicsSettings::linear_elastic_updates). The squeeze of the default case on a
+// coarse mesh and three heated steps at constant force (a hot spot at the sheet/sheet
+// interface, 300 K more per step: the sheets yield around it, the electrodes stay
+// elastic) end in the same displacements and Gauss-point stresses with and without
+// it, to round-off, in the same Newton iterations.
+TEST(MechanicsVerification, LinearUpdatesOfElasticCellsGiveTheGaussPointSolution) {
+  physics::Problem problem = physics::load_problem(std::string(RSW_SOURCE_DIR) + "/validation/paper_case/weld.yaml");
+  problem.mesh.base_size = 0.5e-3;
+  problem.mesh.weld_zone_levels = 1;
+  const fem::Mesh mesh = meshes::weld_mesh(problem.geometry, problem.mesh);
+  materials::MaterialLibrary library;
+  const auto copper = library.load("CuCrZr");
+  const auto steel = library.load("DP1200");
+  const double F = problem.schedule.force.at(0.0);
+  struct Outcome {
+    Eigen::VectorXd u;
+    std::vector<physics::PointStress> stresses;
+    int iterations = 0;
+    long linear = 0;
+    double plastic_strain = 0;  // largest cell average
+  };
+  auto run = [&](bool linear) {
+    physics::MechanicsSettings s;
+    s.friction_coefficient = problem.contact.friction_coefficient;
+    s.linear_elastic_updates = linear;
+    physics::Mechanics mech(mesh, {&copper, &steel, &steel, &copper}, s, 20.0);
+    Outcome out;
+    const auto squeezed = physics::squeeze(mech, F, Eigen::VectorXd::Constant(mesh.n_nodes(), 20.0));
+    EXPECT_TRUE(squeezed.converged) << squeezed.message;
+    for (const auto& st : squeezed.steps) out.iterations += st.iterations;
+    mech.set_time_step(1e-3);
+    for (int k = 1; k <= 3; ++k) {
+      Eigen::VectorXd T(mesh.n_nodes());
+      for (int n = 0; n < mesh.n_nodes(); ++n)
+        T[n] = 20.0 + 300.0 * k * std::exp(-mesh.nodes[n].squaredNorm() / (1.5e-3 * 1.5e-3));
+      const auto report = mech.solve_force_step(F, T);
+      EXPECT_TRUE(report.converged) << report.message;
+      out.iterations += report.iterations;
+      mech.commit();
+    }
+    out.u = mech.displacement();
+    out.stresses = mech.point_stresses();
+    out.linear = mech.linear_cell_updates();
+    for (double p : mech.equivalent_plastic_strain()) out.plastic_strain = std::max(out.plastic_strain, p);
+    return out;
+  };
+  const Outcome gauss = run(false), linear = run(true);
+  double du = (linear.u - gauss.u).lpNorm<Eigen::Infinity>(), ds = 0, smax = 0;
+  for (std::size_t i = 0; i < gauss.stresses.size(); ++i) {
+    ds = std::max(ds, (linear.stresses[i].stress - gauss.stresses[i].stress).lpNorm<Eigen::Infinity>());
+    smax = std::max(smax, gauss.stresses[i].stress.lpNorm<Eigen::Infinity>());
+  }
+  std::printf("linear updates of elastic cells: %ld cell evaluations (of %d cells), Newton iterations %d / %d, "
+              "largest plastic strain %.3f; largest difference %.2e m of %.2e m, %.2e Pa of %.2e Pa\n",
+              linear.linear, mesh.n_cells(), linear.iterations, gauss.iterations, gauss.plastic_strain, du,
+              gauss.u.lpNorm<Eigen::Infinity>(), ds, smax);
+  EXPECT_GT(gauss.plastic_strain, 1e-3);
+  EXPECT_EQ(gauss.linear, 0);
+  EXPECT_GT(linear.linear, 10L * mesh.n_cells());
+  EXPECT_EQ(linear.iterations, gauss.iterations);
+  EXPECT_LT(du, 1e-9 * gauss.u.lpNorm<Eigen::Infinity>());
+  EXPECT_LT(ds, 1e-6 * smax);
+}
