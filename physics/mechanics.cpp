@@ -278,7 +278,8 @@ struct Mechanics::Impl {
   // translation, which B̄ maps to zero), a bound on |Δu − Δu* − t| kept per cell as
   // linear_reach. Such a cell skips its Gauss points: its force and tangent are the
   // linear update (the same to round-off), and its strains and stresses at the final
-  // increment are computed once, at commit() (linear_stale). Most cells of a step
+  // increment are computed once, at the end of the step's Newton iterations and again
+  // at commit() if evaluated since (linear_stale). Most cells of a step
   // (the electrodes, the cold sheet) take this path after the step's first evaluation.
   std::vector<Eigen::Matrix<double, 8, 1>> linear_increment, linear_force;  // Δu*_e, f_e(Δu*)
   std::vector<double> linear_reach;  // m; < 0: none
@@ -836,6 +837,7 @@ struct Mechanics::Impl {
                          std::to_string(s_done) + "; residual " + std::to_string(report.residual) + " N)";
     }
     report.converged = outcome == Outcome::converged;
+    refresh_linear_cells();  // strains and stresses of the final increment everywhere
     // The residual of the state the step ends in (the last evaluation is always there).
     if (!report.converged && outcome != Outcome::failed) report.residual = R.lpNorm<Eigen::Infinity>();
     if (outcome == Outcome::out_of_iterations)
