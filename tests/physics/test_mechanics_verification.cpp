@@ -33,6 +33,22 @@ std::unique_ptr<physics::Mechanics> heated_block(const fem::Mesh& mesh, const st
   mech->commit();
   return mech;
 }
+
+// The default case on the coarse mesh (0.5 mm base, one refinement level): its config,
+// mesh and the electrode and sheet materials.
+struct CoarseStack {
+  physics::Problem problem;
+  fem::Mesh mesh;
+  materials::Material copper, steel;
+};
+CoarseStack coarse_default_stack() {
+  physics::Problem problem = physics::load_problem(std::string(RSW_SOURCE_DIR) + "/validation/paper_case/weld.yaml");
+  problem.mesh.base_size = 0.5e-3;
+  problem.mesh.weld_zone_levels = 1;
+  fem::Mesh mesh = meshes::weld_mesh(problem.geometry, problem.mesh);
+  materials::MaterialLibrary library;
+  return {std::move(problem), std::move(mesh), library.load("CuCrZr"), library.load("DP1200")};
+}
 }  // namespace
 
 // A disc with a hanging-node corner heated uniformly by 100 K expands freely:
@@ -244,13 +260,10 @@ TEST(MechanicsVerification, PlasticSqueezeOfDefaultCaseBalancesForceOnEveryInter
 // plastic squeeze of the default case on a coarse mesh ends where the fully converged
 // one does, to within that tolerance, in fewer iterations.
 TEST(MechanicsVerification, ErrorEstimateStopsNewtonWithinItsToleranceOfTheConvergedState) {
-  physics::Problem problem = physics::load_problem(std::string(RSW_SOURCE_DIR) + "/validation/paper_case/weld.yaml");
-  problem.mesh.base_size = 0.5e-3;
-  problem.mesh.weld_zone_levels = 1;
-  const fem::Mesh mesh = meshes::weld_mesh(problem.geometry, problem.mesh);
-  materials::MaterialLibrary library;
-  const auto copper = library.load("CuCrZr");
-  const auto steel = library.load("DP1200");
+  const CoarseStack stack = coarse_default_stack();
+  const physics::Problem& problem = stack.problem;
+  const fem::Mesh& mesh = stack.mesh;
+  const materials::Material &copper = stack.copper, &steel = stack.steel;
   const Eigen::VectorXd T = Eigen::VectorXd::Constant(mesh.n_nodes(), 20.0);
   auto squeezed = [&](double estimate_tolerance, int& iterations) {
     physics::MechanicsSettings s;
@@ -282,13 +295,10 @@ TEST(MechanicsVerification, ErrorEstimateStopsNewtonWithinItsToleranceOfTheConve
 // elastic) end in the same displacements and Gauss-point stresses with and without
 // it, to round-off, in the same Newton iterations.
 TEST(MechanicsVerification, LinearUpdatesOfElasticCellsGiveTheGaussPointSolution) {
-  physics::Problem problem = physics::load_problem(std::string(RSW_SOURCE_DIR) + "/validation/paper_case/weld.yaml");
-  problem.mesh.base_size = 0.5e-3;
-  problem.mesh.weld_zone_levels = 1;
-  const fem::Mesh mesh = meshes::weld_mesh(problem.geometry, problem.mesh);
-  materials::MaterialLibrary library;
-  const auto copper = library.load("CuCrZr");
-  const auto steel = library.load("DP1200");
+  const CoarseStack stack = coarse_default_stack();
+  const physics::Problem& problem = stack.problem;
+  const fem::Mesh& mesh = stack.mesh;
+  const materials::Material &copper = stack.copper, &steel = stack.steel;
   const double F = problem.schedule.force.at(0.0);
   struct Outcome {
     Eigen::VectorXd u;
