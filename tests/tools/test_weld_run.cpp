@@ -188,17 +188,21 @@ TEST(WeldRun, ElectrodeReachingSolidusWarnsOrStopsAsConfigured) {
 }
 
 // With a still more resistive film (t_f = 0.3 mm) the upper electrode's face melts at
-// about 7 ms; the run goes on (the default) and fails later with the face far above the
-// solidus. The failure message then says when and where the electrode had first melted,
-// whatever stage fails, because the failure most likely follows from it. (The run fails
-// at 27 ms with the stiff friction stick of solver.friction_penalty_ratio = 1; with the
-// default 0.1 it runs to the end, the face molten, and warns.)
+// about 7 ms; the run goes on (the default). A current raised tenfold at 31 ms then makes
+// it fail for certain (at 31 ms: whichever stage gives way first). The failure message
+// says when and where the electrode had first melted, whatever stage fails, because the
+// failure most likely follows from it. (This test used to rely on the film alone to
+// fail the run later: such a run fails or runs through on round-off — at 27 ms with
+// solver.friction_penalty_ratio = 1, at 149 ms with the default, not at all with
+// t_f = 0.5 mm, and through to the end after a change of GMRES's orthogonalisation.)
 TEST(WeldRun, FailureAfterElectrodeMeltingSaysWhenTheElectrodeMelted) {
   const fs::path dir = fs::temp_directory_path() / ("rsw_melted_" + std::to_string(::getpid()));
   std::string out;
   EXPECT_NE(run_rsw("simulate " + paper_case + " -q -o " + dir.string() +
                         " --set mesh.base_size=0.5mm --set mesh.weld_zone.levels=1 --set output.fields=false"
-                        " --set contact.electrode_sheet.film_thickness=0.3mm --set solver.friction_penalty_ratio=1",
+                        " --set contact.electrode_sheet.film_thickness=0.3mm"
+                        " --set 'schedule.current=[[0 ms, 0 kA], [10 ms, 8 kA], [30 ms, 8 kA], [31 ms, 80 kA],"
+                        " [150 ms, 80 kA], [151 ms, 0 kA]]'",
                     out),
             0);
   const std::string failure = failure_reason(dir);
