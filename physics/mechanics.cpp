@@ -21,6 +21,7 @@ using Vector4 = Eigen::Matrix<double, 4, 1>;
 using Matrix4 = Eigen::Matrix<double, 4, 4>;
 using Matrix48 = Eigen::Matrix<double, 4, 8>;
 constexpr double sqrt_half = 0.70710678118654752440;
+constexpr double sqrt_three_halves = 1.22474487139158904910;
 
 enum class Control { force, displacement };
 
@@ -225,7 +226,6 @@ struct Mechanics::Impl {
     linear_reach.assign(mesh.n_cells(), -1.0);
     linear_stamp.assign(mesh.n_cells(), 0);
     linear_stale.assign(mesh.n_cells(), 0);
-    linear_updates = settings.linear_elastic_updates;
     cv.reinit(mesh, 0);
     for (int q = 0; q < n_q; ++q) shape.push_back({cv.N(q, 0), cv.N(q, 1), cv.N(q, 2), cv.N(q, 3)});
     strain.assign(n_points, Vector4::Zero());
@@ -285,7 +285,6 @@ struct Mechanics::Impl {
   std::vector<double> linear_reach;  // m; < 0: none
   std::vector<int> linear_stamp;     // the coefficient generation of the above; 0: none
   std::vector<char> linear_stale;    // trial strains and stresses are those of Δu*, not Δu
-  bool linear_updates = true;        // settings (tests compare both paths)
   std::atomic<long> linear_count{0};  // cell evaluations by linear update
   std::vector<std::array<double, 4>> shape;            // N_a at the Gauss points
   bool need_matrix = true;                             // evaluate(): tangent wanted
@@ -357,6 +356,24 @@ struct Mechanics::Impl {
     }
   }
 
+  // Stress update of Gauss point k for the cell displacement increment du; the trial
+  // strain, state and stress are kept for commit() and the outputs.
+  materials::J2Result update_point(const materials::Material& mat, std::size_t k,
+                                   const Eigen::Matrix<double, 8, 1>& du) {
+    const PointCache& pc = point_cache[k];
+    materials::J2Input in;
+    in.strain = strain[k] + pc.B_bar * du;
+    in.thermal_strain = pc.thermal_strain;
+    in.thermal_strain_slope = pc.thermal_strain_slope;
+    in.temperature = pc.temperature;
+    in.time_step = time_step;
+    materials::J2Result result = materials::j2_update(mat, state[k], in, pc.coefficients);
+    trial_strain[k] = in.strain;
+    trial_state[k] = result.state;
+    trial_stress[k] = result.stress;
+    return result;
+  }
+
   void cell_kernel(int e, fem::LocalSystem& local) {
     refresh_cell(e);
     const auto& c = mesh.cells[e];
@@ -399,20 +416,10 @@ struct Mechanics::Impl {
       const std::size_t k = k0 + q;
       const PointCache& pc = point_cache[k];
       const Matrix48& B_bar = pc.B_bar;
-      const Vector4 eps = strain[k] + B_bar * du;
-      materials::J2Input in;
-      in.strain = eps;
-      in.thermal_strain = pc.thermal_strain;
-      in.thermal_strain_slope = pc.thermal_strain_slope;
-      in.temperature = pc.temperature;
-      in.time_step = time_step;
-      const auto result = materials::j2_update(mat, state[k], in, pc.coefficients);
-      trial_strain[k] = eps;
-      trial_state[k] = result.state;
-      trial_stress[k] = result.stress;
+      const auto result = update_point(mat, k, du);
       elastic = elastic && !result.yielded;
-      if (elastic && linear_updates) {
-        const double scale = 1.2247448713915890 * 2 * pc.coefficients.moduli.shear_modulus * B_bar.norm();
+      if (elastic && settings.linear_elastic_updates) {
+        const double scale = sqrt_three_halves * 2 * pc.coefficients.moduli.shear_modulus * B_bar.norm();
         reach = std::min(reach, (0.99 * pc.coefficients.initial.yield_stress - result.equivalent_stress) / scale);
       }
       if (need_matrix) tangent[q] = result.tangent;
@@ -436,7 +443,7 @@ struct Mechanics::Impl {
       }
     }
     linear_stale[e] = 0;
-    if (elastic && linear_updates && kappa == 0 && reach > 0) {
+    if (elastic && settings.linear_elastic_updates && kappa == 0 && reach > 0) {
       linear_increment[e] = du;
       linear_force[e] = Fe;
       linear_reach[e] = reach;
@@ -458,20 +465,7 @@ struct Mechanics::Impl {
       const std::size_t k0 = static_cast<std::size_t>(e) * n_q;
       Eigen::Matrix<double, 8, 1> du;
       for (int a = 0; a < 4; ++a) du.segment<2>(2 * a) = increment.segment<2>(2 * c[a]);
-      for (int q = 0; q < n_q; ++q) {
-        const std::size_t k = k0 + q;
-        const PointCache& pc = point_cache[k];
-        materials::J2Input in;
-        in.strain = strain[k] + pc.B_bar * du;
-        in.thermal_strain = pc.thermal_strain;
-        in.thermal_strain_slope = pc.thermal_strain_slope;
-        in.temperature = pc.temperature;
-        in.time_step = time_step;
-        const auto result = materials::j2_update(mat, state[k], in, pc.coefficients);
-        trial_strain[k] = in.strain;
-        trial_state[k] = result.state;
-        trial_stress[k] = result.stress;
-      }
+      for (int q = 0; q < n_q; ++q) update_point(mat, k0 + q, du);
       linear_stale[e] = 0;
     }
   }
