@@ -1,5 +1,5 @@
-// The one wrapper around the SuiteSparse direct solvers (through Eigen's support
-// modules): CHOLMOD for symmetric positive definite systems (heat conduction,
+// The one wrapper around the SuiteSparse direct solvers (CHOLMOD and UMFPACK through
+// Eigen's support modules, KLU through its C interface): CHOLMOD for symmetric positive definite systems (heat conduction,
 // electrical conduction, elasticity without friction), UMFPACK and KLU for general
 // unsymmetric ones (friction, monolithic coupling). The symbolic analysis is done
 // once per sparsity pattern and reused by every numerical factorisation.
@@ -32,8 +32,12 @@ class LinearSolver {
   // pattern size changes.
   void analyze(const SparseMatrix& A);
   // Numerical factorisation; throws std::runtime_error if the matrix is singular or,
-  // for CHOLMOD, not positive definite.
+  // for CHOLMOD, not positive definite. KLU refactorises a matrix of the last
+  // factorisation's pattern with that factorisation's pivot sequence while the pivots
+  // stay sound (see kept_pivots), else it pivots afresh.
   void factorize(const SparseMatrix& A);
+  // KLU: the last factorize() reused the pivot sequence of an earlier one.
+  bool kept_pivots() const;
   // Solution of A x = b with the last factorisation.
   Eigen::VectorXd solve(const Eigen::VectorXd& b) const;
   // Steps of iterative refinement in UMFPACK solves (UMFPACK's default: 2; each costs

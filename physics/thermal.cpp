@@ -113,16 +113,16 @@ struct Thermal::Impl {
         dofs(m, 1),
         constraints(dofs.n_dofs()),
         implicit_blend(s.melt_conductivity > 0 && s.melt_smoothing > 0 && s.implicit_melt_blend),
-        solver(implicit_blend ? fem::SolverKind::umfpack : fem::SolverKind::cholmod) {
+        solver(implicit_blend ? fem::SolverKind::klu : fem::SolverKind::cholmod) {
     if (std::getenv("RSW_VERBOSE")) settings.verbose = true;
-    // No iterative refinement in UMFPACK's solves (its default is two steps, each a
-    // product with the factorised matrix and another solve): the Newton loop below
+    // The unsymmetric tangent (λ_m blend) is factorised by KLU, which refactorises each
+    // new tangent of the fixed pattern with the pivot sequence of the last pivoted
+    // factorisation (fem::LinearSolver; test
+    // LinearSolver.KluRefactorisationKeepsThePivotsAndIsBackwardStable): on the default
+    // weld 6.4 against UMFPACK's 13 ms per factorisation, the same fields
+    // (docs/PERFORMANCE.md). No iterative refinement: the Newton loop below
     // re-evaluates the true residual after every correction, and a chord step's
-    // factorisation is of an earlier tangent, which refinement would only fit more
-    // closely. The LU solve itself is backward stable (test
-    // LinearSolver.UmfpackWithoutRefinementIsBackwardStable). Default weld: thermal
-    // 10.2 -> 8.1 s, outputs equal to 1e-11 (docs/PERFORMANCE.md).
-    solver.set_refinement_steps(0);
+    // factorisation is of an earlier tangent anyway.
     if (s.n_gauss < 1 || s.n_gauss > 3) throw std::invalid_argument("Thermal: n_gauss must be 1, 2 or 3");
     if (static_cast<int>(body_material.size()) != mesh.n_bodies())
       throw std::invalid_argument("Thermal: one material per body expected");

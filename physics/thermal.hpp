@@ -32,7 +32,7 @@
 // - The λ_m blend (band δ > 0) is implicit, in nodal Kirchhoff form: in a sheet cell
 //   the flux is −k_t ∇T − (λ_m − k_t) ∇(Σ_b N_b W(T_b)), W(T) = ∫ w dT the integral
 //   of the blend weight, k_t the table value at the solve's start. Its tangent
-//   [k_t + (λ_m − k_t) w(T_b)] ∇N_b·∇N_a is unsymmetric (UMFPACK) but bounded. A
+//   [k_t + (λ_m − k_t) w(T_b)] ∇N_b·∇N_a is unsymmetric (KLU) but bounded. A
 //   lagged blend made the coupling map steeply decreasing where a thin layer melts
 //   (k rising sixfold within 20 K: a layer computed with the table k overheats, with
 //   λ_m it falls below the band), and the coupling cycled by hundreds of kelvin
@@ -116,7 +116,7 @@ struct ThermalSettings {
   double melt_smoothing = 0.0;        // K, blend band below T_melting (0: sharp switch)
   // With a blend band: the blend is implicit in nodal Kirchhoff form (above; the
   // table part of k stays at the solve's starting field) and the tangent unsymmetric
-  // (UMFPACK instead of CHOLMOD). false: the blend at the solve's starting field too.
+  // (KLU instead of CHOLMOD). false: the blend at the solve's starting field too.
   bool implicit_melt_blend = true;
   int max_iterations = 40;
   // K, ∞-norm of a full Newton correction that ends the iteration: the field is then

@@ -163,35 +163,45 @@ TEST(LinearSolver, BackwardErrorIsOettliPragerAndBlindToRowScaling) {
   EXPECT_EQ(fem::componentwise_backward_error(A, Eigen::Vector2d::Zero(), b), 1.0);
 }
 
-// The thermal solver's UMFPACK runs without iterative refinement (physics/thermal.cpp):
-// an unsymmetric, diagonally weighted conduction matrix (a 2D five-point Laplacian of
-// n × n nodes with conductivities spanning 10⁶, plus an upwind-like skew term as the
-// λ_m blend's tangent adds, and a capacity on the diagonal) is solved to round-off
-// componentwise backward error by the LU alone, and agrees with KLU's solve of the
-// same matrix to 10⁻¹⁰ relative.
-TEST(LinearSolver, UmfpackWithoutRefinementIsBackwardStable) {
-  const int n = 40, N = n * n;
+// An unsymmetric, diagonally weighted conduction matrix: a 2D five-point Laplacian of
+// n × n nodes with conductivities spanning 10⁶, an upwind-like skew term (share
+// `skew` of each downward coupling, as the λ_m blend's tangent adds) and a capacity
+// `capacity` times the local conductivity on the diagonal.
+fem::SparseMatrix skewed_conduction(int n, double skew, double capacity) {
   auto id = [n](int i, int j) { return i * n + j; };
   auto k = [](int i, int j) { return std::pow(10.0, 6.0 * ((i * 7 + j * 3) % 11) / 10.0); };
   std::vector<Eigen::Triplet<double>> t;
   for (int i = 0; i < n; ++i)
     for (int j = 0; j < n; ++j) {
       const int p = id(i, j);
-      double diagonal = 1e-3 * k(i, j);  // capacity / dt
+      double diagonal = capacity * k(i, j);  // capacity / dt
       const int di[4] = {1, -1, 0, 0}, dj[4] = {0, 0, 1, -1};
       for (int m = 0; m < 4; ++m) {
         const int a = i + di[m], b = j + dj[m];
         if (a < 0 || a >= n || b < 0 || b >= n) continue;
         const double c = std::sqrt(k(i, j) * k(a, b));
         diagonal += c;
-        t.emplace_back(p, id(a, b), -c + (m == 0 ? 0.3 * c : 0.0));  // unsymmetric part
+        t.emplace_back(p, id(a, b), -c + (m == 0 ? skew * c : 0.0));  // unsymmetric part
       }
       t.emplace_back(p, p, diagonal);
     }
-  fem::SparseMatrix A(N, N);
+  fem::SparseMatrix A(n * n, n * n);
   A.setFromTriplets(t.begin(), t.end());
-  Eigen::VectorXd b(N);
-  for (int p = 0; p < N; ++p) b[p] = std::sin(0.37 * p) * k(p / n, p % n);
+  return A;
+}
+
+Eigen::VectorXd scaled_sine(const fem::SparseMatrix& A) {
+  Eigen::VectorXd b(A.rows());
+  for (Eigen::Index p = 0; p < b.size(); ++p) b[p] = std::sin(0.37 * p) * A.coeff(p, p);
+  return b;
+}
+
+// The thermal solver's LU runs without iterative refinement (physics/thermal.cpp): a
+// skewed conduction matrix is solved to round-off componentwise backward error by
+// UMFPACK's LU alone, and agrees with KLU's solve of the same matrix to 10⁻¹⁰.
+TEST(LinearSolver, UmfpackWithoutRefinementIsBackwardStable) {
+  const fem::SparseMatrix A = skewed_conduction(40, 0.3, 1e-3);
+  const Eigen::VectorXd b = scaled_sine(A);
   fem::LinearSolver umfpack(fem::SolverKind::umfpack), klu(fem::SolverKind::klu);
   umfpack.set_refinement_steps(0);
   const Eigen::VectorXd x = umfpack.solve(A, b), y = klu.solve(A, b);
@@ -200,6 +210,50 @@ TEST(LinearSolver, UmfpackWithoutRefinementIsBackwardStable) {
               (x - y).norm() / y.norm());
   EXPECT_LT(omega, 1e-14);
   EXPECT_LT((x - y).norm() / y.norm(), 1e-10);
+}
+
+// The thermal tangent changes its values, not its pattern, from one factorisation to
+// the next: KLU refactorises with the pivot sequence of the last pivoted
+// factorisation. A matrix with other capacities and skew is solved to round-off
+// componentwise backward error with the kept pivots, and agrees with a fresh
+// factorisation to 10⁻¹⁰.
+TEST(LinearSolver, KluRefactorisationKeepsThePivotsAndIsBackwardStable) {
+  const fem::SparseMatrix A1 = skewed_conduction(40, 0.3, 1e-3), A2 = skewed_conduction(40, 0.45, 3e-3);
+  const Eigen::VectorXd b = scaled_sine(A2);
+  fem::LinearSolver kept(fem::SolverKind::klu), fresh(fem::SolverKind::klu);
+  kept.factorize(A1);
+  EXPECT_FALSE(kept.kept_pivots());
+  kept.factorize(A2);
+  EXPECT_TRUE(kept.kept_pivots());
+  const Eigen::VectorXd x = kept.solve(b), y = fresh.solve(A2, b);
+  const double omega = fem::componentwise_backward_error(A2, x, b);
+  std::printf("KLU with kept pivots: backward error %.3e, difference to a fresh factorisation %.3e\n", omega,
+              (x - y).norm() / y.norm());
+  EXPECT_LT(omega, 1e-14);
+  EXPECT_LT((x - y).norm() / y.norm(), 1e-10);
+}
+
+// Kept pivots that no longer work are dropped: [[1, 1], [1, 2]] pivots on its
+// diagonal; [[0, 1], [1, 2]] has a zero there, so KLU pivots afresh (rows swapped) and
+// solves [[0, 1], [1, 2]] x = (1, 3) exactly: x = (1, 1).
+TEST(LinearSolver, KluPivotsAfreshWhereTheKeptPivotsFail) {
+  fem::SparseMatrix A(2, 2);
+  A.insert(0, 0) = 1;
+  A.insert(0, 1) = 1;
+  A.insert(1, 0) = 1;
+  A.insert(1, 1) = 2;
+  A.makeCompressed();
+  fem::LinearSolver solver(fem::SolverKind::klu);
+  solver.factorize(A);
+  A.coeffRef(0, 0) = 0;
+  solver.factorize(A);
+  EXPECT_FALSE(solver.kept_pivots());
+  const Eigen::VectorXd x = solver.solve(Eigen::Vector2d(1, 3));
+  EXPECT_NEAR(x[0], 1.0, 1e-15);
+  EXPECT_NEAR(x[1], 1.0, 1e-15);
+  // A singular matrix of the same pattern is reported, not solved.
+  A.coeffRef(1, 0) = 0;
+  EXPECT_THROW(solver.factorize(A), std::runtime_error);
 }
 
 // A chain of n conductors alternating 10¹⁴ and 1 S, grounded at one end, with 1 A
