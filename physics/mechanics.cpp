@@ -792,14 +792,22 @@ struct Mechanics::Impl {
   // those of the start of the step, so the solution at s = 1 is the step's own, as if
   // Newton had found it directly. (Sub-steps of the driver, by contrast, commit
   // intermediate states.) Intermediate targets are solved loosely (1 % of |R_0|).
-  MechanicsStepReport newton(Control ctrl, double load_scale) {
+  // `K_start` and `R_start`, if given, are the evaluation at the starting increment
+  // (with pairing_within set by it): Newton takes them over instead of evaluating again.
+  MechanicsStepReport newton(Control ctrl, double load_scale, fem::SparseMatrix* K_start = nullptr,
+                             Eigen::VectorXd* R_start = nullptr) {
     MechanicsStepReport report;
     fem::SparseMatrix K;
     Eigen::VectorXd R;
     const double tolerance = settings.residual_tolerance * std::max(load_scale, 1.0);
-    pairing_within = true;
     const Eigen::VectorXd start = increment;
-    evaluate(ctrl, K, R, true);
+    if (K_start && R_start) {
+      std::swap(K, *K_start);
+      std::swap(R, *R_start);
+    } else {
+      pairing_within = true;
+      evaluate(ctrl, K, R, true);
+    }
     report.residual = R.lpNorm<Eigen::Infinity>();
     const Eigen::VectorXd R0 = R;
     Outcome outcome = report.residual <= tolerance ? Outcome::converged
@@ -891,14 +899,22 @@ MechanicsStepReport Mechanics::solve_force_step(double force, const Eigen::Vecto
     // The alternative guess: the last increment scaled (at constant force the
     // temperature, and with it the thermal strain, moves on smoothly from step to
     // step); the one with the smaller residual starts Newton. The converged step does
-    // not depend on the choice.
-    fem::SparseMatrix unused;
+    // not depend on the choice. The alternative, which wins in most steps, is
+    // evaluated with its tangent, and Newton starts from that evaluation.
+    fem::SparseMatrix unused, K_alternative;
     Eigen::VectorXd R_rule, R_alternative;
     m.evaluate(Control::force, unused, R_rule, false);
     const Eigen::VectorXd rule = m.increment;
     m.increment = m.last_increment * m.predictor_scale;
-    m.evaluate(Control::force, unused, R_alternative, false);
-    if (!(R_alternative.norm() < R_rule.norm())) m.increment = rule;
+    m.pairing_within = true;
+    m.evaluate(Control::force, K_alternative, R_alternative, true);
+    m.predictor_scale = 0;
+    if (R_alternative.norm() < R_rule.norm()) {
+      auto report = m.newton(Control::force, std::abs(force), &K_alternative, &R_alternative);
+      force_ = force;
+      return report;
+    }
+    m.increment = rule;
   }
   m.predictor_scale = 0;
   auto report = m.newton(Control::force, std::abs(force));
