@@ -181,6 +181,46 @@ double componentwise_backward_error(const SparseMatrix& A, const Eigen::VectorXd
 struct PreconditionedGmres::Impl {
   LinearSolver cholmod{SolverKind::cholmod};
   LinearSolver umfpack{SolverKind::umfpack};
+  // The symmetric part (M + Mᵀ)/2 of a structurally symmetric M (every assembled FE
+  // matrix) has M's pattern: its values are 0.5 (m_k + m_transpose[k]), with
+  // transpose[k] the position of the mirrored entry, found once per pattern (0.2
+  // against 2.8 ms for Eigen's transpose and sum on the 16 155-unknown mechanics
+  // tangent). Empty transpose: the pattern is not symmetric.
+  std::vector<int> outer, inner, transpose;
+  SparseMatrix symmetric;
+  const SparseMatrix& symmetric_part(const SparseMatrix& M) {
+    const bool same = static_cast<Eigen::Index>(outer.size()) == M.cols() + 1 &&
+                      static_cast<Eigen::Index>(inner.size()) == M.nonZeros() &&
+                      std::equal(outer.begin(), outer.end(), M.outerIndexPtr()) &&
+                      std::equal(inner.begin(), inner.end(), M.innerIndexPtr());
+    if (!same) {
+      outer.assign(M.outerIndexPtr(), M.outerIndexPtr() + M.cols() + 1);
+      inner.assign(M.innerIndexPtr(), M.innerIndexPtr() + M.nonZeros());
+      transpose.assign(inner.size(), 0);
+      bool symmetric_pattern = M.rows() == M.cols() && M.isCompressed();
+      for (Eigen::Index j = 0; symmetric_pattern && j < M.cols(); ++j)
+        for (int k = outer[j]; k < outer[j + 1]; ++k) {
+          const int i = inner[k];
+          const auto first = inner.begin() + outer[i], last = inner.begin() + outer[i + 1];
+          const auto hit = std::lower_bound(first, last, static_cast<int>(j));
+          if (hit == last || *hit != j) {
+            symmetric_pattern = false;
+            break;
+          }
+          transpose[k] = static_cast<int>(hit - inner.begin());
+        }
+      if (!symmetric_pattern) transpose.clear();
+      symmetric = M;
+    }
+    if (transpose.empty()) {
+      symmetric = 0.5 * (M + SparseMatrix(M.transpose()));
+    } else {
+      const double* m = M.valuePtr();
+      double* v = symmetric.valuePtr();
+      for (std::size_t k = 0; k < transpose.size(); ++k) v[k] = 0.5 * (m[k] + m[transpose[k]]);
+    }
+    return symmetric;
+  }
 };
 
 PreconditionedGmres::PreconditionedGmres() : impl_(std::make_unique<Impl>()) {
@@ -193,9 +233,8 @@ PreconditionedGmres& PreconditionedGmres::operator=(PreconditionedGmres&&) noexc
 void PreconditionedGmres::set_preconditioner(const SparseMatrix& M) {
   kind_ = Kind::none;
   ++n_factorizations_;
-  const SparseMatrix S = 0.5 * (M + SparseMatrix(M.transpose()));
   try {
-    impl_->cholmod.factorize(S);
+    impl_->cholmod.factorize(impl_->symmetric_part(M));
     kind_ = Kind::symmetric_part;
     return;
   } catch (const std::runtime_error&) {
