@@ -29,6 +29,22 @@ std::string to_string(SolverKind kind) {
   return "?";
 }
 
+// A copy of a compressed matrix's sparsity pattern, to recognise the pattern of a
+// later matrix (what a kept analysis, pivot order or entry map belongs to).
+struct PatternCopy {
+  std::vector<int> outer, inner;
+  bool matches(const SparseMatrix& A) const {
+    return static_cast<Eigen::Index>(outer.size()) == A.cols() + 1 &&
+           static_cast<Eigen::Index>(inner.size()) == A.nonZeros() &&
+           std::equal(outer.begin(), outer.end(), A.outerIndexPtr()) &&
+           std::equal(inner.begin(), inner.end(), A.innerIndexPtr());
+  }
+  void assign(const SparseMatrix& A) {
+    outer.assign(A.outerIndexPtr(), A.outerIndexPtr() + A.cols() + 1);
+    inner.assign(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros());
+  }
+};
+
 // KLU through its C interface (Eigen's wrapper always factorises afresh): a matrix of
 // the pattern of the last factorisation is refactorised with that factorisation's
 // pivot sequence (klu_refactor, no pivot search: 6.4 against 13.4 ms on the
@@ -40,7 +56,7 @@ struct KluFactor {
   klu_common common;
   klu_symbolic* symbolic = nullptr;
   klu_numeric* numeric = nullptr;
-  std::vector<int> outer, inner;  // pattern of the analysis
+  PatternCopy pattern;             // of the analysis
   double pivoted_rcond = 0;        // klu_rcond of the last factorisation with pivoting
   bool refactorized = false;       // the last factorize() kept the pivot sequence
   KluFactor() { klu_defaults(&common); }
@@ -51,31 +67,24 @@ struct KluFactor {
     if (numeric) klu_free_numeric(&numeric, &common);
     if (symbolic) klu_free_symbolic(&symbolic, &common);
   }
-  bool same_pattern(const SparseMatrix& A) const {
-    return static_cast<Eigen::Index>(outer.size()) == A.cols() + 1 &&
-           static_cast<Eigen::Index>(inner.size()) == A.nonZeros() &&
-           std::equal(outer.begin(), outer.end(), A.outerIndexPtr()) &&
-           std::equal(inner.begin(), inner.end(), A.innerIndexPtr());
-  }
   void analyze(const SparseMatrix& A) {
     clear();
-    outer.assign(A.outerIndexPtr(), A.outerIndexPtr() + A.cols() + 1);
-    inner.assign(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros());
-    symbolic = klu_analyze(static_cast<int>(A.rows()), outer.data(), inner.data(), &common);
+    pattern.assign(A);
+    symbolic = klu_analyze(static_cast<int>(A.rows()), pattern.outer.data(), pattern.inner.data(), &common);
     if (!symbolic) throw std::runtime_error("klu: symbolic analysis failed (status " + std::to_string(common.status) + ")");
   }
   // False if the matrix is singular.
   bool factorize(const SparseMatrix& A) {
-    if (!symbolic || !same_pattern(A)) analyze(A);
+    if (!symbolic || !pattern.matches(A)) analyze(A);
     const double* values = A.valuePtr();
     if (numeric) {
-      refactorized = klu_refactor(outer.data(), inner.data(), const_cast<double*>(values), symbolic, numeric, &common) &&
+      refactorized = klu_refactor(pattern.outer.data(), pattern.inner.data(), const_cast<double*>(values), symbolic, numeric, &common) &&
                      klu_rcond(symbolic, numeric, &common) && common.rcond >= 1e-3 * pivoted_rcond;
       if (refactorized) return true;
       klu_free_numeric(&numeric, &common);
     }
     refactorized = false;
-    numeric = klu_factor(outer.data(), inner.data(), const_cast<double*>(values), symbolic, &common);
+    numeric = klu_factor(pattern.outer.data(), pattern.inner.data(), const_cast<double*>(values), symbolic, &common);
     if (!numeric || !klu_rcond(symbolic, numeric, &common) || !(common.rcond > 0)) {
       if (numeric) klu_free_numeric(&numeric, &common);
       return false;
@@ -194,16 +203,14 @@ struct PreconditionedGmres::Impl {
   // transpose[k] the position of the mirrored entry, found once per pattern (0.2
   // against 2.8 ms for Eigen's transpose and sum on the 16 155-unknown mechanics
   // tangent). Empty transpose: the pattern is not symmetric.
-  std::vector<int> outer, inner, transpose;
+  PatternCopy pattern;
+  std::vector<int> transpose;
   SparseMatrix symmetric;
   const SparseMatrix& symmetric_part(const SparseMatrix& M) {
-    const bool same = static_cast<Eigen::Index>(outer.size()) == M.cols() + 1 &&
-                      static_cast<Eigen::Index>(inner.size()) == M.nonZeros() &&
-                      std::equal(outer.begin(), outer.end(), M.outerIndexPtr()) &&
-                      std::equal(inner.begin(), inner.end(), M.innerIndexPtr());
-    if (!same) {
-      outer.assign(M.outerIndexPtr(), M.outerIndexPtr() + M.cols() + 1);
-      inner.assign(M.innerIndexPtr(), M.innerIndexPtr() + M.nonZeros());
+    if (!pattern.matches(M)) {
+      pattern.assign(M);
+      const std::vector<int>& outer = pattern.outer;
+      const std::vector<int>& inner = pattern.inner;
       transpose.assign(inner.size(), 0);
       bool symmetric_pattern = M.rows() == M.cols() && M.isCompressed();
       for (Eigen::Index j = 0; symmetric_pattern && j < M.cols(); ++j)

@@ -1,7 +1,8 @@
 // The one wrapper around the SuiteSparse direct solvers (CHOLMOD and UMFPACK through
-// Eigen's support modules, KLU through its C interface): CHOLMOD for symmetric positive definite systems (heat conduction,
-// electrical conduction, elasticity without friction), UMFPACK and KLU for general
-// unsymmetric ones (friction, monolithic coupling). The symbolic analysis is done
+// Eigen's support modules, KLU through its C interface): CHOLMOD for symmetric
+// positive definite systems (heat and electrical conduction, elasticity without
+// friction), UMFPACK and KLU for general unsymmetric ones (friction, the thermal
+// tangent with the λ_m blend). The symbolic analysis is done
 // once per sparsity pattern and reused by every numerical factorisation.
 #pragma once
 
