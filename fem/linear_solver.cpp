@@ -99,8 +99,14 @@ struct KluFactor {
   }
 };
 
+// Eigen's CHOLMOD wrapper with read access to the factor (PreconditionedGmres copies
+// a supernodal one in single precision).
+struct CholmodCholesky : Eigen::CholmodDecomposition<SparseMatrix, Eigen::Lower> {
+  const cholmod_factor* factor() const { return m_cholmodFactor; }  // null before the first factorisation
+};
+
 struct LinearSolver::Impl {
-  Eigen::CholmodDecomposition<SparseMatrix, Eigen::Lower> cholmod;
+  CholmodCholesky cholmod;
   Eigen::UmfPackLU<SparseMatrix> umfpack;
   // Mutable: klu_solve takes its workspace from the (non-const) common object.
   mutable KluFactor klu;
@@ -195,8 +201,84 @@ double componentwise_backward_error(const SparseMatrix& A, const Eigen::VectorXd
   return omega;
 }
 
+// Single-precision copy of a supernodal CHOLMOD factor P A Pᵀ = L Lᵀ, and the two
+// triangular solves with it: x = Pᵀ L⁻ᵀ L⁻¹ P b. CHOLMOD stores supernode s (columns
+// k1..k2−1, sharing one row structure of n_row rows, the first k2−k1 of them the
+// columns themselves) as a dense column-major n_row × (k2−k1) block; each solve
+// treats the block's triangle by a dense triangular solve and its remaining rows by
+// one matrix-vector product (the supernodal solve of Davis, Direct Methods for Sparse
+// Linear Systems, SIAM 2006, ch. 9). Arithmetic in float, like the stored factor.
+class SinglePrecisionCholesky {
+ public:
+  // False (and nothing kept) unless L is a real supernodal LLᵀ factor.
+  bool assign(const cholmod_factor* L) {
+    if (!L || !L->is_super || !L->is_ll || L->xtype != CHOLMOD_REAL || L->itype != CHOLMOD_INT) return false;
+    n_ = static_cast<int>(L->n);
+    const int n_super = static_cast<int>(L->nsuper);
+    const int* super = static_cast<const int*>(L->super);
+    const int* pi = static_cast<const int*>(L->pi);
+    const int* px = static_cast<const int*>(L->px);
+    super_.assign(super, super + n_super + 1);
+    pi_.assign(pi, pi + n_super + 1);
+    px_.assign(px, px + n_super + 1);
+    rows_.assign(static_cast<const int*>(L->s), static_cast<const int*>(L->s) + pi[n_super]);
+    perm_.assign(static_cast<const int*>(L->Perm), static_cast<const int*>(L->Perm) + n_);
+    const double* x = static_cast<const double*>(L->x);
+    values_.assign(x, x + px[n_super]);  // double → float
+    int widest = 0;
+    for (int k = 0; k < n_super; ++k) widest = std::max(widest, pi[k + 1] - pi[k]);
+    z_.resize(n_);
+    work_.resize(widest);
+    return true;
+  }
+
+  Eigen::VectorXd solve(const Eigen::VectorXd& b) const {
+    using Block = Eigen::Map<Eigen::MatrixXf>;
+    using Vector = Eigen::Map<Eigen::VectorXf>;
+    for (int k = 0; k < n_; ++k) z_[k] = static_cast<float>(b[perm_[k]]);
+    const int n_super = static_cast<int>(super_.size()) - 1;
+    auto block = [this](int s) {
+      const int n_col = super_[s + 1] - super_[s], n_row = pi_[s + 1] - pi_[s];
+      return Block(const_cast<float*>(values_.data()) + px_[s], n_row, n_col);
+    };
+    for (int s = 0; s < n_super; ++s) {  // L y = P b
+      const Block L = block(s);
+      const int n_col = static_cast<int>(L.cols()), n_below = static_cast<int>(L.rows()) - n_col;
+      Vector head(z_.data() + super_[s], n_col);
+      L.topRows(n_col).triangularView<Eigen::Lower>().solveInPlace(head);
+      if (n_below == 0) continue;
+      Vector below(work_.data(), n_below);
+      below.noalias() = L.bottomRows(n_below) * head;
+      const int* r = rows_.data() + pi_[s] + n_col;
+      for (int i = 0; i < n_below; ++i) z_[r[i]] -= work_[i];
+    }
+    for (int s = n_super - 1; s >= 0; --s) {  // Lᵀ z = y
+      const Block L = block(s);
+      const int n_col = static_cast<int>(L.cols()), n_below = static_cast<int>(L.rows()) - n_col;
+      Vector head(z_.data() + super_[s], n_col);
+      if (n_below > 0) {
+        const int* r = rows_.data() + pi_[s] + n_col;
+        for (int i = 0; i < n_below; ++i) work_[i] = z_[r[i]];
+        head.noalias() -= L.bottomRows(n_below).transpose() * Vector(work_.data(), n_below);
+      }
+      L.topRows(n_col).triangularView<Eigen::Lower>().transpose().solveInPlace(head);
+    }
+    Eigen::VectorXd x(n_);
+    for (int k = 0; k < n_; ++k) x[perm_[k]] = z_[k];
+    return x;
+  }
+
+ private:
+  int n_ = 0;
+  std::vector<int> super_, pi_, px_, rows_, perm_;
+  std::vector<float> values_;
+  mutable std::vector<float> z_, work_;  // workspace of solve()
+};
+
 struct PreconditionedGmres::Impl {
   LinearSolver cholmod{SolverKind::cholmod};
+  SinglePrecisionCholesky single;
+  bool single_active = false;  // the symmetric-part factor is applied through `single`
   LinearSolver umfpack{SolverKind::umfpack};
   // The symmetric part (M + Mᵀ)/2 of a structurally symmetric M (every assembled FE
   // matrix) has M's pattern: its values are 0.5 (m_k + m_transpose[k]), with
@@ -245,12 +327,18 @@ PreconditionedGmres::~PreconditionedGmres() = default;
 PreconditionedGmres::PreconditionedGmres(PreconditionedGmres&&) noexcept = default;
 PreconditionedGmres& PreconditionedGmres::operator=(PreconditionedGmres&&) noexcept = default;
 
+bool PreconditionedGmres::single_precision_active() const {
+  return kind_ == Kind::symmetric_part && impl_->single_active;
+}
+
 void PreconditionedGmres::set_preconditioner(const SparseMatrix& M) {
   kind_ = Kind::none;
+  impl_->single_active = false;
   ++n_factorizations_;
   try {
     impl_->cholmod.factorize(impl_->symmetric_part(M));
     kind_ = Kind::symmetric_part;
+    impl_->single_active = single_precision_ && impl_->single.assign(impl_->cholmod.impl_->cholmod.factor());
     return;
   } catch (const std::runtime_error&) {
     // Not positive definite: the full matrix by LU (GMRES then converges at once).
@@ -264,6 +352,8 @@ PreconditionedGmres::Report PreconditionedGmres::solve(const SparseMatrix& A, co
                                                        int max_iterations) const {
   if (kind_ == Kind::none) throw std::logic_error("PreconditionedGmres: no preconditioner");
   const LinearSolver& M = kind_ == Kind::symmetric_part ? impl_->cholmod : impl_->umfpack;
+  const bool single = single_precision_active();
+  auto precondition = [&](const Eigen::VectorXd& v) { return single ? impl_->single.solve(v) : M.solve(v); };
   Report report;
   const Eigen::Index n = b.size();
   x = Eigen::VectorXd::Zero(n);
@@ -285,7 +375,7 @@ PreconditionedGmres::Report PreconditionedGmres::solve(const SparseMatrix& A, co
   int k = 0;
   double residual = beta;
   while (k < m) {
-    Z.push_back(M.solve(V[k]));
+    Z.push_back(precondition(V[k]));
     Eigen::VectorXd w = A * Z[k];
     for (int i = 0; i <= k; ++i) {
       H(i, k) = w.dot(V[i]);
@@ -328,6 +418,11 @@ PreconditionedGmres::Report PreconditionedGmres::solve_refreshing(const SparseMa
     set_preconditioner(A);
     report = solve(A, b, x, tolerance, max_iterations);
     n_iterations_ += report.iterations;
+    if (!report.converged && impl_->single_active) {  // the rounding of the float copy hurt
+      impl_->single_active = false;
+      report = solve(A, b, x, tolerance, max_iterations);
+      n_iterations_ += report.iterations;
+    }
     if (!report.converged)
       throw std::runtime_error("GMRES with a fresh preconditioner did not converge (relative residual " +
                                std::to_string(report.relative_residual) + ")");

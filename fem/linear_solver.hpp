@@ -48,6 +48,7 @@ class LinearSolver {
   Eigen::VectorXd solve(const SparseMatrix& A, const Eigen::VectorXd& b);
 
  private:
+  friend class PreconditionedGmres;  // copies a supernodal CHOLMOD factor in single precision
   struct Impl;
   SolverKind kind_;
   std::unique_ptr<Impl> impl_;
@@ -75,6 +76,17 @@ double componentwise_backward_error(const SparseMatrix& A, const Eigen::VectorXd
 // the GMRES iterations show when it has gone stale. The tolerance is on the true
 // residual of the system, so the solution does not depend on how old the
 // preconditioner is.
+//
+// A supernodal Cholesky factor (CHOLMOD's choice for the mechanics tangent; the
+// scalar conduction matrices factorise column by column) is applied in single
+// precision: a float copy of L halves the memory the two triangular solves stream,
+// which bounds their speed (0.62 against 0.86 ms per application on the default
+// weld's 16 155-unknown tangent, docs/PERFORMANCE.md). The Krylov basis, the products
+// with A and the residual stay in double, and the preconditioned vectors are kept
+// (flexible GMRES), so the rounding of the preconditioner changes how many
+// iterations reach the tolerance, not the accuracy of the solution. Where a fresh
+// single-precision factor does not converge, the solve is repeated with the double
+// one.
 class PreconditionedGmres {
  public:
   struct Report {
@@ -93,6 +105,10 @@ class PreconditionedGmres {
   bool has_preconditioner() const { return kind_ != Kind::none; }
   // Drops the preconditioner (the next solve must set one).
   void reset() { kind_ = Kind::none; }
+  // Apply supernodal Cholesky factors in single precision (the default), or never.
+  void set_single_precision(bool on) { single_precision_ = on; }
+  // The current preconditioner is applied in single precision.
+  bool single_precision_active() const;
   int n_factorizations() const { return n_factorizations_; }
 
   // x with |b - A x| <= tolerance |b| after at most max_iterations GMRES iterations
@@ -113,6 +129,7 @@ class PreconditionedGmres {
   struct Impl;
   std::unique_ptr<Impl> impl_;
   Kind kind_ = Kind::none;
+  bool single_precision_ = true;
   int n_factorizations_ = 0;
   int n_iterations_ = 0;
   int last_iterations_ = 0;
