@@ -6,6 +6,7 @@
 #include <klu.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -423,9 +424,14 @@ PreconditionedGmres::Report PreconditionedGmres::solve_refreshing(const SparseMa
       report = solve(A, b, x, tolerance, max_iterations);
       n_iterations_ += report.iterations;
     }
-    if (!report.converged)
-      throw std::runtime_error("GMRES with a fresh preconditioner did not converge (relative residual " +
-                               std::to_string(report.relative_residual) + ")");
+    if (!report.converged) {
+      char text[160];
+      std::snprintf(text, sizeof text,
+                    "GMRES with a fresh preconditioner did not converge in %d iterations (relative residual %.3g, "
+                    "tolerance %.3g)",
+                    max_iterations, report.relative_residual, tolerance);
+      throw std::runtime_error(text);
+    }
   }
   last_iterations_ = report.iterations;
   return report;

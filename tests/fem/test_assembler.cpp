@@ -317,8 +317,10 @@ fem::SparseMatrix skewed_conduction_3d(int n, double skew) {
 // reaches a relative residual of 10⁻¹² and the direct LU solution to 10⁻¹⁰, as with
 // the double-precision factor, in at most three more iterations. On the symmetric
 // matrix itself each iteration gains about the float round-off, so two or three
-// iterations reach 10⁻¹² (a wrong factor copy would not converge at all). A scalar
-// 2D conduction matrix, factorised column by column, stays in double precision.
+// iterations reach 10⁻¹² (a wrong factor copy would not converge at all); where a
+// fresh float factor cannot converge within the allowed iterations, the refreshing
+// solve repeats with the double factor. A scalar 2D conduction matrix, factorised
+// column by column, stays in double precision.
 TEST(PreconditionedGmres, SinglePrecisionFactorGivesTheDoublePrecisionSolution) {
   const fem::SparseMatrix A = skewed_conduction_3d(16, 0.2), S = skewed_conduction_3d(16, 0.0);
   const Eigen::VectorXd b = scaled_sine(A);
@@ -348,6 +350,16 @@ TEST(PreconditionedGmres, SinglePrecisionFactorGivesTheDoublePrecisionSolution) 
   EXPECT_LT((x - y).norm() / y.norm(), 1e-11);
   std::printf("GMRES iterations, float / double factor: unsymmetric %d / %d, symmetric %d / %d\n",
               in_float.iterations, in_double.iterations, own_float.iterations, own_double.iterations);
+
+  // Two iterations allowed: the float factor needs three, so the refreshing solve
+  // falls back to the double factor of the fresh factorisation, which needs one.
+  fem::PreconditionedGmres fallback;
+  Eigen::VectorXd u;
+  const auto rescued = fallback.solve_refreshing(S, c, u, 1e-12, 10, 2);
+  EXPECT_TRUE(rescued.converged);
+  EXPECT_EQ(rescued.iterations, 1);
+  EXPECT_FALSE(fallback.single_precision_active());
+  EXPECT_LT((u - y).norm() / y.norm(), 1e-11);
 
   const fem::SparseMatrix P = skewed_conduction(30, 0.3, 1e-3);
   single.set_preconditioner(P);
