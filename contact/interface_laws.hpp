@@ -36,9 +36,7 @@
 //
 // Bonding (our choice, MODEL.md §3): a S/S point bonds as both sides approach their
 // solidus, with a degree β that rises smoothly from 0 at Δ (`contact.bonding_band`,
-// 150 K, where steel bonds in the solid state under pressure: forge welding at about
-// 1200–1300 °C, the corona bond of a spot weld) below the colder side's solidus to 1
-// at it, and never falls (history per
+// 50 K) below the colder side's solidus to 1 at it, and never falls (history per
 // pairing point, committed after a converged step). Where β < 1 the film's resistance
 // fades in series with the bonded layer (partly_bonded_conductance); bonding all at
 // once (Δ = 0) made the dynamic resistance drop by up to 10 % in one step where a

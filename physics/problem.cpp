@@ -191,7 +191,7 @@ ConfigSchema build_schema() {
   s.number("contact.friction_coefficient", "1", "1").default_value("0.3")
       .range(Range::closed(0, 1))
       .doc("Coulomb friction coefficient on all contact interfaces; 0 is frictionless.");
-  s.number("contact.bonding_band", "K", "K").default_value("150 K")
+  s.number("contact.bonding_band", "K", "K").default_value("50 K")
       .range(Range::closed(0, 200))
       .doc("Sheet/sheet points bond gradually as both sides approach their solidus: the "
            "bonding degree rises smoothly (C1) from 0 at this much below the solidus to 1 at "
@@ -199,9 +199,7 @@ ConfigSchema build_schema() {
            "layer, and the mechanics tie takes the share of the traction it gives. 0 bonds a "
            "point all at once when both sides reach the solidus, which makes the dynamic "
            "resistance drop by up to 10 % in one step where a region bonds together and the "
-           "outputs jump between neighbouring parameter values. The default lets sheets start to "
-           "bond 150 K below the solidus (1320 degC for DP1200), where steel bonds in the solid "
-           "state under pressure (forge welding, the corona bond around a spot weld's nugget).");
+           "outputs jump between neighbouring parameter values.");
 
   s.section("thermal", "Initial and boundary conditions of the thermal field, and the "
                        "modified conductivity of the melt.");

@@ -50,7 +50,7 @@ struct ContactParameters {
   double htc_p3 = 0;                 // -, P3
   double htc_p4 = 0;                 // -, P4
   double friction_coefficient = 0;   // -, Coulomb mu
-  double bonding_band = 150;         // K, S/S bonding degree rises over this much below the solidus (0: at once)
+  double bonding_band = 50;          // K, S/S bonding degree rises over this much below the solidus (0: at once)
 };
 
 struct ThermalParameters {
