@@ -21,7 +21,8 @@
 // box of higher level; each body is then 2:1 balanced.
 //
 // Names: bodies "upper_electrode", "sheet_1".."sheet_n", "lower_electrode";
-// electrode boundaries "axis", "contact_face" (the dome), "flank", "side",
+// electrode boundaries "axis", "contact_face" (the dome and the flank's first
+// millimetre, radially, beyond the face edge), "flank" (the rest of it), "side",
 // "end_face", "cooling_bore"; sheet boundaries "axis", "top", "bottom", "edge";
 // interfaces "es_upper" (upper_electrode.contact_face, sheet_1.top),
 // "ss_1_2", "ss_2_3" (sheet_k.bottom, sheet_k+1.top), "es_lower"

@@ -88,11 +88,25 @@ TEST(WeldMesh, BoundaryNodesLieOnTheTrueElectrodeContour) {
       const fem::Point& p = mesh.nodes[n];
       EXPECT_NEAR(p.y(), apex + meshes::electrode_profile(g, p.x()), 1e-15) << name << " node " << n;
     }
-  // Dome nodes exactly on the R30 sphere centred on the axis 30 mm above the apex.
+  // Dome nodes exactly on the R30 sphere centred on the axis 30 mm above the apex. The
+  // contact face also takes in the flank's first millimetre beyond the face edge (where
+  // deep indentation wraps the sheet around the edge), and stops there.
+  const double a = 0.5 * g.face_diameter;
+  int on_flank = 0;
+  double outermost = 0;
   for (int n : mesh.boundary_nodes("upper_electrode.contact_face")) {
     const fem::Point& p = mesh.nodes[n];
+    outermost = std::max(outermost, p.x());
+    if (p.x() > a + 1e-15) {
+      ++on_flank;
+      continue;
+    }
     EXPECT_NEAR(std::hypot(p.x(), p.y() - (apex + g.face_radius)), g.face_radius, 1e-15);
   }
+  EXPECT_GE(on_flank, 3);
+  EXPECT_GT(outermost, a + 0.75e-3);
+  EXPECT_LT(outermost, a + 1.25e-3);
+  for (int n : mesh.boundary_nodes("upper_electrode.flank")) EXPECT_GE(mesh.nodes[n].x(), outermost - 1e-15);
   for (int n : mesh.boundary_nodes("upper_electrode.cooling_bore")) {
     const fem::Point& p = mesh.nodes[n];
     const bool on_wall = std::abs(p.x() - 0.5 * g.bore_diameter) < 1e-15;
