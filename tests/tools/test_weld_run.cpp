@@ -24,8 +24,9 @@ namespace fs = std::filesystem;
 
 namespace {
 const std::string paper_case = std::string(RSW_SOURCE_DIR) + "/validation/paper_case/weld.yaml";
-const std::string coarse =
-    " --set mesh.base_size=0.5mm --set mesh.weld_zone.levels=1 --set output.interval=10ms";
+const std::string coarse_mesh = " --set mesh.base_size=0.5mm --set mesh.weld_zone.levels=1";
+const std::string coarse = coarse_mesh + " --set output.interval=10ms";
+const std::string coarse_signals_only = coarse_mesh + " --set output.fields=false";  // no field files
 
 int run_rsw(const std::string& args, std::string& output) {
   const std::string cmd = std::string(RSW_BINARY) + " " + args + " 2>&1";
@@ -161,7 +162,7 @@ TEST(WeldRun, SheetContactRadiusCoversTheFusedNugget) {
 // warning (summary.json, results.h5) and finishes; with solver.electrode_melting=stop
 // it fails there, naming the electrode.
 TEST(WeldRun, ElectrodeReachingSolidusWarnsOrStopsAsConfigured) {
-  const std::string args = " -q --set mesh.base_size=0.5mm --set mesh.weld_zone.levels=1 --set output.fields=false"
+  const std::string args = " -q" + coarse_signals_only +
                            " --set contact.electrode_sheet.film_thickness=0.03mm"
                            " --set \"schedule.current=[[0 ms,0 kA],[10 ms,8 kA],[30 ms,8 kA],[31 ms,0 kA]]\""
                            " --set \"schedule.force=[[0 ms,3 kN],[31 ms,3 kN]]\" --set schedule.cool_time=0ms";
@@ -198,8 +199,7 @@ TEST(WeldRun, ElectrodeReachingSolidusWarnsOrStopsAsConfigured) {
 TEST(WeldRun, FailureAfterElectrodeMeltingSaysWhenTheElectrodeMelted) {
   const fs::path dir = fs::temp_directory_path() / ("rsw_melted_" + std::to_string(::getpid()));
   std::string out;
-  EXPECT_NE(run_rsw("simulate " + paper_case + " -q -o " + dir.string() +
-                        " --set mesh.base_size=0.5mm --set mesh.weld_zone.levels=1 --set output.fields=false"
+  EXPECT_NE(run_rsw("simulate " + paper_case + " -q -o " + dir.string() + coarse_signals_only +
                         " --set contact.electrode_sheet.film_thickness=0.3mm"
                         " --set 'schedule.current=[[0 ms, 0 kA], [10 ms, 8 kA], [30 ms, 8 kA], [31 ms, 80 kA],"
                         " [150 ms, 80 kA], [151 ms, 0 kA]]'",
@@ -224,8 +224,7 @@ TEST(WeldRun, FailureAfterElectrodeMeltingSaysWhenTheElectrodeMelted) {
 TEST(WeldRun, ThermalNewtonConvergesThroughTheMeltingOnsetAtAResistiveSheetFilm) {
   const fs::path dir = fs::temp_directory_path() / ("rsw_point58_" + std::to_string(::getpid()));
   std::string out;
-  EXPECT_EQ(run_rsw("simulate " + paper_case + " -q -o " + dir.string() +
-                        " --set mesh.base_size=0.5mm --set mesh.weld_zone.levels=1 --set output.fields=false"
+  EXPECT_EQ(run_rsw("simulate " + paper_case + " -q -o " + dir.string() + coarse_signals_only +
                         " --set output.interval=1ms"
                         " --set contact.sheet_sheet.film_thickness=8.7696639927009923e-05m"
                         " --set \"contact.sheet_sheet.coating_resistivity=1.6688925344824186e-06 ohm*m\""
@@ -292,8 +291,7 @@ TEST(WeldRun, NumericalNoiseInP1IsSmallAgainstTheChangeOverThePrior) {
     std::string out;
     char value[32];
     std::snprintf(value, sizeof value, "%.12g", p1);
-    const int status = run_rsw("simulate " + paper_case + " -q -o " + dir.string() +
-                                   " --set mesh.base_size=0.5mm --set mesh.weld_zone.levels=1 --set output.fields=false"
+    const int status = run_rsw("simulate " + paper_case + " -q -o " + dir.string() + coarse_signals_only +
                                    " --set contact.electrode_sheet.htc_p1=" + value, out);
     EXPECT_EQ(status, 0) << out;
     std::string fout;
