@@ -15,6 +15,7 @@
 #include <iterator>
 #include <map>
 #include <memory>
+#include <regex>
 #include <sstream>
 #include <string>
 #include <unistd.h>
@@ -237,6 +238,38 @@ TEST(WeldRun, ThermalNewtonConvergesThroughTheMeltingOnsetAtAResistiveSheetFilm)
       << out;
   const auto run = read_csv(dir / "signals.csv");
   EXPECT_GT(run.at("d_n_liq [m]").back(), 0.0);  // the sheets did melt
+  fs::remove_all(dir);
+}
+
+// The coarse Table I study (90 welds over the paper's prior, about 2.5 min on two
+// cores) as a check of robustness: a solver change that leaves the default weld equal
+// to 10⁻⁶ can still change which runs of the prior finish. Every run it fails must have
+// melted an electrode first (the resistive end of the E/S film prior, outside the
+// model), and few do: 9 or 10 of 90 with the builds of 2026-11-25, 19 with the thermal
+// chord policy that stalled at melting onsets (one of them, design point 58, with no
+// melting electrode), found only by rerunning the study (docs/STUDIES.md).
+TEST(WeldRun, CoarseTableOneStudyFailsOnlyRunsWhoseElectrodeMelted) {
+  const fs::path dir = fs::temp_directory_path() / ("rsw_study_" + std::to_string(::getpid()));
+  std::string out;
+  ASSERT_EQ(run_rsw("study run " + std::string(RSW_SOURCE_DIR) +
+                        "/validation/studies/table1_lhs90_coarse.yaml --workers 2 -q -o " + dir.string(),
+                    out),
+            0)
+      << out;
+  std::smatch done;
+  ASSERT_TRUE(std::regex_search(out, done, std::regex(R"(90/90 runs done .*, (\d+) failed)"))) << out;
+  const int failed = std::stoi(done[1]);
+  EXPECT_LE(failed, 12) << out;
+  int reasons = 0;
+  std::istringstream lines(out);
+  for (std::string line; std::getline(lines, line);)
+    if (line.find("failed run ") != std::string::npos) {
+      ++reasons;
+      EXPECT_TRUE(line.find("after an electrode had melted") != std::string::npos ||
+                  line.find("above the solidus of its material") != std::string::npos)
+          << line;
+    }
+  EXPECT_EQ(reasons, failed) << out;
   fs::remove_all(dir);
 }
 
