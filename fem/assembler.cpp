@@ -125,35 +125,37 @@ Assembler::Assembler(const Mesh& mesh, const DofMap& dofs, const Constraints& co
     if (colour[e] >= 0) colours_[colour[e]].push_back(e);
 }
 
-void Assembler::scatter(int element, const LocalSystem& local, SparseMatrix& K, Eigen::VectorXd& F,
-                        bool homogeneous, bool assemble_matrix) const {
+void Assembler::scatter_vector(int element, const LocalSystem& local, Eigen::VectorXd& F, bool homogeneous) const {
   const auto& cd = element_dofs_[element];
   const int n_local = static_cast<int>(cd.size());
   const int* start = expansion_start_.data() + offset_[element];
   const Term* terms = expansion_.data();
-  // Vector part: F_e - K_e g for inhomogeneous constraints.
-  auto scatter_vector = [&](const Eigen::VectorXd& rhs) {
+  // F_e - K_e g for inhomogeneous constraints.
+  auto add = [&](const Eigen::VectorXd& rhs) {
     for (int a = 0; a < n_local; ++a)
       for (int i = start[a]; i < start[a + 1]; ++i) F[terms[i].dof] += terms[i].weight * rhs[a];
   };
   if (homogeneous) {
-    scatter_vector(local.vector);
+    add(local.vector);
   } else {
     Eigen::VectorXd rhs = local.vector;
     for (int b = 0; b < n_local; ++b) {
       const double g = constraints_.inhomogeneity(cd[b]);
       if (g != 0.0) rhs -= local.matrix.col(b) * g;
     }
-    scatter_vector(rhs);
+    add(rhs);
   }
-  if (!assemble_matrix) return;
+}
+
+void Assembler::scatter_matrix(int element, const double* matrix, int n_local, double* values) const {
+  const int* start = expansion_start_.data() + offset_[element];
+  const Term* terms = expansion_.data();
   // Zero entries are skipped (a coupling group's system is mostly zero: each contact
   // point touches four of its nodes); the positions are then advanced past them.
-  double* values = K.valuePtr();
   const int* pos = positions_.data() + position_start_[element];
   const int column_size = expanded_size_[element];
   for (int b = 0; b < n_local; ++b) {
-    const double* column = local.matrix.data() + static_cast<std::ptrdiff_t>(b) * local.matrix.rows();
+    const double* column = matrix + static_cast<std::ptrdiff_t>(b) * n_local;
     const int n_q = start[b + 1] - start[b];
     if (std::all_of(column, column + n_local, [](double v) { return v == 0.0; })) {
       pos += n_q * column_size;
@@ -173,13 +175,69 @@ void Assembler::scatter(int element, const LocalSystem& local, SparseMatrix& K, 
   }
 }
 
+void Assembler::scatter(int element, const LocalSystem& local, SparseMatrix& K, Eigen::VectorXd& F,
+                        bool homogeneous, bool assemble_matrix) const {
+  scatter_vector(element, local, F, homogeneous);
+  if (assemble_matrix)
+    scatter_matrix(element, local.matrix.data(), static_cast<int>(local.matrix.rows()), K.valuePtr());
+}
+
+void Assembler::enable_cell_matrix_cache() {
+  const std::size_t n_local = static_cast<std::size_t>(dofs_.dofs_per_cell());
+  cache_matrices_.assign(static_cast<std::size_t>(mesh_.n_cells()) * n_local * n_local, 0.0);
+  cache_sum_.assign(static_cast<std::size_t>(pattern_.nonZeros()), 0.0);
+  cache_assemblies_ = 0;
+  cache_enabled_ = true;
+}
+
+void Assembler::scatter_cached(int cell, const LocalSystem& local, Eigen::VectorXd& F, bool homogeneous,
+                               bool rebuild) const {
+  scatter_vector(cell, local, F, homogeneous);
+  const int n_local = static_cast<int>(local.matrix.rows());
+  const std::size_t size = static_cast<std::size_t>(n_local) * n_local;
+  double* kept = cache_matrices_.data() + static_cast<std::size_t>(cell) * size;
+  const double* now = local.matrix.data();
+  if (rebuild) {
+    std::copy(now, now + size, kept);
+    scatter_matrix(cell, now, n_local, cache_sum_.data());
+    cache_scattered_.fetch_add(1, std::memory_order_relaxed);
+    return;
+  }
+  if (std::equal(now, now + size, kept)) {
+    cache_reused_.fetch_add(1, std::memory_order_relaxed);
+    return;
+  }
+  double difference[64 * 64];
+  if (size > sizeof difference / sizeof difference[0])
+    throw std::logic_error("Assembler: cell matrices above 64 x 64 are not cached");
+  for (std::size_t i = 0; i < size; ++i) difference[i] = now[i] - kept[i];
+  std::copy(now, now + size, kept);
+  scatter_matrix(cell, difference, n_local, cache_sum_.data());
+  cache_scattered_.fetch_add(1, std::memory_order_relaxed);
+}
+
 void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F, bool homogeneous,
                          bool assemble_matrix) const {
   const CellKernel& cell_kernel = terms.cells;
+  // Cell matrices go through the cache (into cache_sum_, copied into K below).
+  const bool cached = cache_enabled_ && assemble_matrix && cell_kernel;
   if (assemble_matrix) {
     if (K.rows() != pattern_.rows() || K.nonZeros() != pattern_.nonZeros()) K = pattern_;
-    std::fill(K.valuePtr(), K.valuePtr() + K.nonZeros(), 0.0);
+    if (!cached) std::fill(K.valuePtr(), K.valuePtr() + K.nonZeros(), 0.0);
   }
+  // A rebuild scatters every cell afresh into a zeroed sum; until it completes (a
+  // kernel may throw) the sum is incomplete and the next assembly rebuilds again.
+  const bool rebuild = cached && (cache_assemblies_ == 0 || !cache_complete_);
+  if (rebuild) {
+    std::fill(cache_sum_.begin(), cache_sum_.end(), 0.0);
+    cache_complete_ = false;
+  }
+  auto scatter_cell = [&](int e, const LocalSystem& local) {
+    if (cached)
+      scatter_cached(e, local, F, homogeneous, rebuild);
+    else
+      scatter(e, local, K, F, homogeneous, assemble_matrix);
+  };
   F.setZero(constraints_.n_free());
   const int n_local = dofs_.dofs_per_cell();
 
@@ -201,7 +259,7 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
             local.matrix.setZero(n_local, n_local);
             local.vector.setZero(n_local);
             cell_kernel(cells[k], local);
-            scatter(cells[k], local, K, F, homogeneous, assemble_matrix);
+            scatter_cell(cells[k], local);
           } catch (...) {
 #pragma omp critical(rsw_assembler_failure)
             if (!failed.exchange(true)) failure = std::current_exception();
@@ -218,8 +276,13 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
       local.matrix.setZero(n_local, n_local);
       local.vector.setZero(n_local);
       cell_kernel(e, local);
-      scatter(e, local, K, F, homogeneous, assemble_matrix);
+      scatter_cell(e, local);
     }
+  if (cached) {
+    cache_complete_ = true;
+    cache_assemblies_ = (cache_assemblies_ + 1) % 64;
+    std::copy(cache_sum_.begin(), cache_sum_.end(), K.valuePtr());
+  }
   for (const auto& term : terms.faces)
     for (const auto& face : *term.faces) {
       local.matrix.setZero(n_local, n_local);

@@ -12,6 +12,16 @@
 // such as CellValues in thread_local storage or build it inside the kernel). Cells
 // on a dof shared by more than 16 cells (a "hub", e.g. a rigid end face's motion)
 // are assembled serially at the end.
+//
+// Incremental cell matrices (optional, enable_cell_matrix_cache()): in a Newton
+// iteration most cells often return the same matrix as before (an elastic cell
+// within a load step). The assembler then keeps each cell's last matrix K_e^old and
+// the sum S of all cells' condensed contributions; a matrix assembly scatters, for
+// each cell whose matrix changed (bit for bit), only the difference K_e − K_e^old
+// into S, and the matrix starts as a copy of S before the face and group terms are
+// added. The result equals a fresh assembly to round-off (the sum is formed in
+// another order); S is rebuilt from scratch every 64th matrix assembly so that the
+// rounding of the differences cannot accumulate.
 #pragma once
 
 #include "fem/constraints.hpp"
@@ -20,6 +30,8 @@
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+
+#include <atomic>
 
 #include <functional>
 #include <vector>
@@ -58,6 +70,13 @@ class Assembler {
   int n_groups() const { return static_cast<int>(element_dofs_.size()) - mesh_.n_cells(); }
 
   int n_free() const { return constraints_.n_free(); }
+  // Turns on the incremental cell matrices (see above). Worth it where most cell
+  // matrices repeat between assemblies; costs 8 n_local² bytes per cell.
+  void enable_cell_matrix_cache();
+  // Cells whose matrix was scattered (as a difference or afresh) by the matrix
+  // assemblies so far, and cells whose unchanged matrix was skipped (cache only).
+  long cell_matrices_scattered() const { return cache_scattered_; }
+  long cell_matrices_reused() const { return cache_reused_; }
   int n_colours() const { return static_cast<int>(colours_.size()); }
 
   // Assembles K_red and F_red. `cell_kernel` may be empty (face terms only) and the
@@ -78,6 +97,14 @@ class Assembler {
   // Element e: cells first (e < n_cells), then coupling groups.
   void scatter(int element, const LocalSystem& local, SparseMatrix& K, Eigen::VectorXd& F,
                bool homogeneous, bool assemble_matrix) const;
+  void scatter_vector(int element, const LocalSystem& local, Eigen::VectorXd& F, bool homogeneous) const;
+  // values[position] += the condensed entries of the local matrix `matrix` (column-major,
+  // n_local x n_local) of `element`; zero entries are skipped.
+  void scatter_matrix(int element, const double* matrix, int n_local, double* values) const;
+  // Cell part with the incremental cache: local matrices compared with the kept ones,
+  // differences scattered into cache_sum_.
+  void scatter_cached(int cell, const LocalSystem& local, Eigen::VectorXd& F, bool homogeneous,
+                      bool rebuild) const;
 
   const Mesh& mesh_;
   const DofMap& dofs_;
@@ -99,6 +126,13 @@ class Assembler {
   std::vector<int> expanded_size_;    // per element, Σ_a |expansion(a)|
   std::vector<std::vector<int>> colours_;  // cells assembled in parallel, colour by colour
   std::vector<int> serial_cells_;          // cells on hub dofs, assembled serially
+  // Incremental cell matrices (mutable: a cache of what the kernels returned).
+  bool cache_enabled_ = false;
+  mutable std::vector<double> cache_matrices_;  // per cell, its last local matrix (n_local², column-major)
+  mutable std::vector<double> cache_sum_;       // Σ over cells of their scattered matrices, in K's value order
+  mutable int cache_assemblies_ = 0;            // matrix assemblies since the last rebuild (mod 64)
+  mutable bool cache_complete_ = false;         // cache_sum_ holds every kept matrix
+  mutable std::atomic<long> cache_scattered_{0}, cache_reused_{0};
 };
 
 }  // namespace rsw::fem

@@ -332,20 +332,29 @@ bool PreconditionedGmres::single_precision_active() const {
   return kind_ == Kind::symmetric_part && impl_->single_active;
 }
 
-void PreconditionedGmres::set_preconditioner(const SparseMatrix& M) {
+void PreconditionedGmres::set_preconditioner(const SparseMatrix& M, const Surrogate& surrogate) {
   kind_ = Kind::none;
   impl_->single_active = false;
   ++n_factorizations_;
-  try {
-    impl_->cholmod.factorize(impl_->symmetric_part(M));
+  auto try_symmetric_part = [&](const SparseMatrix& S) {
+    try {
+      impl_->cholmod.factorize(impl_->symmetric_part(S));
+    } catch (const std::runtime_error&) {
+      return false;  // not positive definite
+    }
     kind_ = Kind::symmetric_part;
     impl_->single_active = single_precision_ && impl_->single.assign(impl_->cholmod.impl_->cholmod.factor());
-    return;
-  } catch (const std::runtime_error&) {
-    // Not positive definite: the full matrix by LU (GMRES then converges at once).
+    return true;
+  };
+  if (try_symmetric_part(M)) return;
+  if (surrogate) {
+    ++n_surrogates_;
+    if (try_symmetric_part(surrogate())) return;
   }
+  // The full matrix by LU (GMRES then converges at once).
   impl_->umfpack.factorize(M);
   kind_ = Kind::full;
+  ++n_full_factorizations_;
 }
 
 PreconditionedGmres::Report PreconditionedGmres::solve(const SparseMatrix& A, const Eigen::VectorXd& b,
@@ -411,12 +420,13 @@ PreconditionedGmres::Report PreconditionedGmres::solve(const SparseMatrix& A, co
 
 PreconditionedGmres::Report PreconditionedGmres::solve_refreshing(const SparseMatrix& A, const Eigen::VectorXd& b,
                                                                   Eigen::VectorXd& x, double tolerance,
-                                                                  int refresh_after, int max_iterations) {
-  if (!has_preconditioner() || last_iterations_ > refresh_after) set_preconditioner(A);
+                                                                  int refresh_after, int max_iterations,
+                                                                  const Surrogate& surrogate) {
+  if (!has_preconditioner() || last_iterations_ > refresh_after) set_preconditioner(A, surrogate);
   Report report = solve(A, b, x, tolerance, max_iterations);
   n_iterations_ += report.iterations;
   if (!report.converged) {
-    set_preconditioner(A);
+    set_preconditioner(A, surrogate);
     report = solve(A, b, x, tolerance, max_iterations);
     n_iterations_ += report.iterations;
     if (!report.converged && impl_->single_active) {  // the rounding of the float copy hurt

@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -87,6 +88,14 @@ double componentwise_backward_error(const SparseMatrix& A, const Eigen::VectorXd
 // iterations reach the tolerance, not the accuracy of the solution. Where a fresh
 // single-precision factor does not converge, the solve is repeated with the double
 // one.
+//
+// Where the symmetric part of M is not positive definite, a caller may offer a
+// surrogate matrix S of the same pattern, nearby and with a positive definite
+// symmetric part (for a frictional contact tangent: without the coupling of the
+// friction traction to the contact pressure, μ ∂p/∂u, whose symmetric part is
+// indefinite where points slide); the factor of (S + Sᵀ)/2 is then tried before the
+// LU of M. GMRES still solves with M, so only the iteration count depends on the
+// choice.
 class PreconditionedGmres {
  public:
   struct Report {
@@ -99,9 +108,11 @@ class PreconditionedGmres {
   PreconditionedGmres(PreconditionedGmres&&) noexcept;
   PreconditionedGmres& operator=(PreconditionedGmres&&) noexcept;
 
+  // The surrogate S (see above), formed only when needed; empty: none.
+  using Surrogate = std::function<const SparseMatrix&()>;
   // Factorises the preconditioner from M (see above). Throws std::runtime_error if
   // neither factorisation succeeds.
-  void set_preconditioner(const SparseMatrix& M);
+  void set_preconditioner(const SparseMatrix& M, const Surrogate& surrogate = {});
   bool has_preconditioner() const { return kind_ != Kind::none; }
   // Drops the preconditioner (the next solve must set one).
   void reset() { kind_ = Kind::none; }
@@ -110,6 +121,8 @@ class PreconditionedGmres {
   // The current preconditioner is applied in single precision.
   bool single_precision_active() const;
   int n_factorizations() const { return n_factorizations_; }
+  int n_surrogates() const { return n_surrogates_; }                   // surrogates formed
+  int n_full_factorizations() const { return n_full_factorizations_; }  // LU of M itself
 
   // x with |b - A x| <= tolerance |b| after at most max_iterations GMRES iterations
   // (no restart), starting from x = 0. Without convergence x is the last iterate.
@@ -121,7 +134,7 @@ class PreconditionedGmres {
   // within `max_iterations` (which is then repeated). Throws std::runtime_error if
   // even a fresh preconditioner does not converge.
   Report solve_refreshing(const SparseMatrix& A, const Eigen::VectorXd& b, Eigen::VectorXd& x, double tolerance,
-                          int refresh_after, int max_iterations);
+                          int refresh_after, int max_iterations, const Surrogate& surrogate = {});
   int n_iterations() const { return n_iterations_; }  // summed over solve_refreshing
 
  private:
@@ -131,6 +144,8 @@ class PreconditionedGmres {
   Kind kind_ = Kind::none;
   bool single_precision_ = true;
   int n_factorizations_ = 0;
+  int n_surrogates_ = 0;
+  int n_full_factorizations_ = 0;
   int n_iterations_ = 0;
   int last_iterations_ = 0;
 };

@@ -134,6 +134,17 @@ struct InterfaceState {
   double contact_radius = 0;     // m, outermost zero of the interpolated gap (bonded points closed)
 };
 
+// Work of the linear algebra so far (fem::PreconditionedGmres, fem::Assembler), over
+// force and displacement control.
+struct MechanicsSolverCounts {
+  long gmres_iterations = 0;
+  long factorisations = 0;          // preconditioners factorised
+  long surrogates = 0;              // of which needed the surrogate (an indefinite symmetric part)
+  long lu_factorisations = 0;       // of which fell back to the LU of the tangent
+  long cell_matrices_scattered = 0;  // cell matrices assembled (new or changed)
+  long cell_matrices_reused = 0;     // unchanged cell matrices taken from the previous assembly
+};
+
 class Mechanics {
  public:
   // `body_materials[b]` is the material of mesh body b; `initial_temperature` is the
@@ -185,6 +196,7 @@ class Mechanics {
   // Cell evaluations so far that took the linear update of an elastic cell
   // (MechanicsSettings::linear_elastic_updates) instead of their Gauss points.
   long linear_cell_updates() const;
+  MechanicsSolverCounts solver_counts() const;
   double normal_penalty(const std::string& interface) const;
   // The contact pairings (one per mesh interface, in mesh.interfaces order), at the
   // last solved configuration, and the normal pressure at each of their points (Pa).

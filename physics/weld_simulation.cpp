@@ -672,6 +672,15 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
                   e.what());
     }
   }
+  {
+    const MechanicsSolverCounts c = mech.solver_counts();
+    result.mechanics_linear_algebra = {{"gmres_iterations", c.gmres_iterations},
+                                       {"factorisations", c.factorisations},
+                                       {"surrogates", c.surrogates},
+                                       {"lu_factorisations", c.lu_factorisations},
+                                       {"cell_matrices_scattered", c.cell_matrices_scattered},
+                                       {"cell_matrices_reused", c.cell_matrices_reused}};
+  }
   // Final nugget geometry (MODEL.md §8).
   {
     const auto peak = peak_vector();
@@ -779,6 +788,7 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
     j["mechanics_substep_splits"] = result.n_mechanics_substepped;
     j["mechanics_loose_substeps"] = result.n_mechanics_loose;
     j["coupling_retries"] = result.n_coupling_retries;
+    for (const auto& [name, count] : result.mechanics_linear_algebra) j["mechanics_linear_algebra"][name] = count;
     for (const auto& [name, value] : result.nugget) j["nugget"][name] = value;
     for (const auto& [name, value] : result.energy) j["energy_J"][name] = value;
     j["dynamic_resistance_peak_ohm"] = resistance_peak;  // over all weld steps

@@ -60,6 +60,10 @@ struct RunResult {
   int n_mechanics_substepped = 0;   // mechanics retries with sub-steps (see run_weld)
   int n_mechanics_loose = 0;        // smallest sub-steps accepted at a stalled residual (see run_weld)
   int n_coupling_retries = 0;       // electro-thermal solves retried (other depth, damping; see run_weld)
+  // Linear algebra of the mechanics (gmres_iterations, factorisations, surrogates,
+  // lu_factorisations, cell_matrices_scattered, cell_matrices_reused; see
+  // MechanicsSolverCounts).
+  std::vector<std::pair<std::string, long>> mechanics_linear_algebra;
   // Final nugget geometry (d_n_liq, h_n_liq, d_n_sol, h_n_sol, penetration_<sheet>,
   // w_elec, d_indent, t_unmolt; m or fractions) and the energy balance (electrical,
   // stored, removed, imbalance in J; nugget_fraction of the electrical energy held
