@@ -1,6 +1,8 @@
 // Pattern, colouring and condensed scatter of the assembly loop; see assembler.hpp.
 #include "fem/assembler.hpp"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <atomic>
 #include <cstdint>
@@ -241,7 +243,20 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
   F.setZero(constraints_.n_free());
   const int n_local = dofs_.dofs_per_cell();
 
-  if (cell_kernel) {
+  if (cell_kernel && omp_get_max_threads() == 1) {
+    // One thread: no OpenMP region at all. Even a one-thread team ends each worksharing
+    // loop at a barrier whose last arrival wakes its waiters by a futex system call,
+    // waiters or not: one per colour and assembly, about 9 % of a default weld's time
+    // on a virtual machine (docs/PERFORMANCE.md).
+    LocalSystem local;
+    for (const auto& cells : colours_)
+      for (const int e : cells) {
+        local.matrix.setZero(n_local, n_local);
+        local.vector.setZero(n_local);
+        cell_kernel(e, local);
+        scatter_cell(e, local);
+      }
+  } else if (cell_kernel) {
     // An exception may not leave an OpenMP region (the process would terminate): the
     // first one thrown by a cell kernel is kept, the remaining cells are skipped, and
     // it is rethrown after the region.

@@ -7,9 +7,11 @@
 // P^T K P and P^T (F - K g) without forming P. The sparsity pattern and the
 // position of every contribution in it are computed once, so re-assembly (every
 // Newton iteration and time step) only zeroes and accumulates values. Cells are
-// coloured so that no two cells of one colour share a free dof; each colour is
-// assembled in parallel with OpenMP (kernels must then be thread-safe: keep scratch
-// such as CellValues in thread_local storage or build it inside the kernel). Cells
+// coloured so that no two cells of one colour share a free dof; with more than one
+// OpenMP thread each colour is assembled in parallel (kernels must then be
+// thread-safe: keep scratch such as CellValues in thread_local storage or build it
+// inside the kernel); with one, no OpenMP region is entered (each of its barriers
+// costs a system call, even in a team of one). Cells
 // on a dof shared by more than 16 cells (a "hub", e.g. a rigid end face's motion)
 // are assembled serially at the end.
 //

@@ -2,6 +2,7 @@
 #include "fem/threads.hpp"
 
 #include <omp.h>
+#include <vtkSMPTools.h>
 
 #include <stdexcept>
 #include <string>
@@ -13,9 +14,12 @@ void use_threads(int n) {
   omp_set_num_threads(n);
   if (n == 1) {
     omp_set_max_active_levels(0);
+    vtkSMPTools::SetBackend("Sequential");
   } else {
     omp_set_max_active_levels(1);
     omp_set_dynamic(1);
+    vtkSMPTools::SetBackend(VTK_SMP_BACKEND);  // the build's default (Debian: TBB)
+    vtkSMPTools::Initialize(n);
   }
 }
 

@@ -6,13 +6,18 @@
 // taking turns, and a squeeze took 25-30 % longer than on one thread
 // (docs/PERFORMANCE.md). The only run-time controls OpenMP offers over such a clause
 // are the active-levels limit and dynamic adjustment (OpenMP 5.1, sections 2.6.1 and
-// 3.2.x), and use_threads sets them.
+// 3.2.x), and use_threads sets them. VTK's own loops (vtkSMPTools, in the .vtu
+// writers) run on TBB threads in Debian's build, which ask the system for the number of
+// processors on every loop and spin in sched_yield after it (measured on the coarse
+// weld: 7657 reads of /sys/devices/system/cpu/online and 105 000 sched_yield calls, a
+// second thread busy for about 9 % of the run): one thread selects VTK's sequential
+// backend.
 #pragma once
 
 namespace rsw::fem {
 
 // n == 1: every parallel region, ours and the libraries', runs on the calling thread
-// (max-active-levels 0). n > 1: n threads for our loops, and dynamic adjustment on, so
+// (max-active-levels 0; VTK's sequential backend). n > 1: n threads for our loops, and dynamic adjustment on, so
 // a library's fixed thread request is cut to the cores the machine has free.
 // Throws std::invalid_argument for n < 1.
 void use_threads(int n);

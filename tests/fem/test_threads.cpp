@@ -5,6 +5,9 @@
 
 #include <gtest/gtest.h>
 #include <omp.h>
+#include <vtkSMPTools.h>
+
+#include <string>
 
 #include <stdexcept>
 
@@ -24,6 +27,17 @@ TEST(Threads, OneThreadAlsoHoldsForALibrarysFixedThreadRequest) {
   rsw::fem::use_threads(1);
   EXPECT_EQ(omp_get_max_threads(), 1);
   EXPECT_EQ(threads_of_a_fixed_request_of_four(), 1);
+}
+
+// VTK's loops (the .vtu writers) run sequentially on one thread: no TBB worker that
+// spins after each loop; with several threads VTK's default backend returns.
+TEST(Threads, OneThreadAlsoHoldsForVtksLoops) {
+  rsw::fem::use_threads(1);
+  EXPECT_EQ(std::string(vtkSMPTools::GetBackend()), "Sequential");
+  EXPECT_EQ(vtkSMPTools::GetEstimatedNumberOfThreads(), 1);
+  rsw::fem::use_threads(2);
+  EXPECT_EQ(std::string(vtkSMPTools::GetBackend()), VTK_SMP_BACKEND);
+  rsw::fem::use_threads(1);
 }
 
 TEST(Threads, SeveralThreadsRunOurLoopsOnAtMostThatMany) {
