@@ -36,15 +36,25 @@ void laplace_kernel(const fem::Mesh& mesh, int cell, fem::LocalSystem& local) {
       local.vector(a) += fv.N(q, a) * fv.JxW(q);
     }
 }
+// small_mesh() with one scalar dof per node, its hanging nodes constrained and the
+// inhomogeneous values 1 + y on the right edge.
+struct ConstrainedScalarMesh {
+  fem::Mesh mesh = small_mesh();
+  fem::DofMap dofs{mesh, 1};
+  fem::Constraints c{dofs.n_dofs()};
+  ConstrainedScalarMesh() {
+    c.add_hanging_nodes(mesh, dofs);
+    c.constrain_boundary(mesh, dofs, "m.right", 0, [](const fem::Point& p) { return 1.0 + p.y(); });
+    c.close();
+  }
+};
 }  // namespace
 
 TEST(Assembler, CondensedSystemEqualsExplicitProlongation) {
-  const fem::Mesh mesh = small_mesh();
-  fem::DofMap dofs(mesh, 1);
-  fem::Constraints c(dofs.n_dofs());
-  c.add_hanging_nodes(mesh, dofs);
-  c.constrain_boundary(mesh, dofs, "m.right", 0, [](const fem::Point& p) { return 1.0 + p.y(); });
-  c.close();
+  const ConstrainedScalarMesh problem;
+  const fem::Mesh& mesh = problem.mesh;
+  const fem::DofMap& dofs = problem.dofs;
+  const fem::Constraints& c = problem.c;
   fem::Assembler assembler(mesh, dofs, c);
   fem::SparseMatrix K;
   Eigen::VectorXd F;
@@ -113,12 +123,10 @@ TEST(Assembler, ExceptionOfACellKernelReachesTheCaller) {
 // through leaves the next assembly correct, and so do 2 threads and more than 64
 // assemblies (the periodic rebuild).
 TEST(Assembler, IncrementalCellMatricesEqualAFreshAssembly) {
-  const fem::Mesh mesh = small_mesh();
-  fem::DofMap dofs(mesh, 1);
-  fem::Constraints c(dofs.n_dofs());
-  c.add_hanging_nodes(mesh, dofs);
-  c.constrain_boundary(mesh, dofs, "m.right", 0, [](const fem::Point& p) { return 1.0 + p.y(); });
-  c.close();
+  const ConstrainedScalarMesh problem;
+  const fem::Mesh& mesh = problem.mesh;
+  const fem::DofMap& dofs = problem.dofs;
+  const fem::Constraints& c = problem.c;
   fem::Assembler fresh(mesh, dofs, c), incremental(mesh, dofs, c);
   incremental.enable_cell_matrix_cache();
   const int n_cells = mesh.n_cells();
@@ -181,12 +189,10 @@ TEST(Assembler, IncrementalCellMatricesEqualAFreshAssembly) {
 }
 
 TEST(LinearSolver, CholmodUmfpackAndKluAgreeAndDirichletValuesAreExact) {
-  const fem::Mesh mesh = small_mesh();
-  fem::DofMap dofs(mesh, 1);
-  fem::Constraints c(dofs.n_dofs());
-  c.add_hanging_nodes(mesh, dofs);
-  c.constrain_boundary(mesh, dofs, "m.right", 0, [](const fem::Point& p) { return 1.0 + p.y(); });
-  c.close();
+  const ConstrainedScalarMesh problem;
+  const fem::Mesh& mesh = problem.mesh;
+  const fem::DofMap& dofs = problem.dofs;
+  const fem::Constraints& c = problem.c;
   fem::Assembler assembler(mesh, dofs, c);
   fem::SparseMatrix K;
   Eigen::VectorXd F;
