@@ -246,8 +246,8 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
   if (cell_kernel && omp_get_max_threads() == 1) {
     // One thread: no OpenMP region at all. Even a one-thread team ends each worksharing
     // loop at a barrier whose last arrival wakes its waiters by a futex system call,
-    // waiters or not: one per colour and assembly, about 9 % of a default weld's time
-    // on a virtual machine (docs/PERFORMANCE.md).
+    // waiters or not: one per colour and assembly (with the kernel's futex path about
+    // 5 % of a default weld's profile on a virtual machine, docs/PERFORMANCE.md).
     LocalSystem local;
     for (const auto& cells : colours_)
       for (const int e : cells) {
