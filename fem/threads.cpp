@@ -1,13 +1,22 @@
-// See threads.hpp: OpenMP thread counts for a process and for the libraries it calls.
+// See threads.hpp: OpenMP thread counts for a process and for the libraries it calls,
+// and the one-thread entry point for parallel regions (GOMP_parallel below).
 #include "fem/threads.hpp"
 
+#include <dlfcn.h>
 #include <omp.h>
 #include <vtkSMPTools.h>
 
+#include <atomic>
+#include <cstdio>
+#include <cstdlib>
 #include <stdexcept>
 #include <string>
 
 namespace rsw::fem {
+namespace {
+// Set by use_threads(1): every parallel region is inactive (max-active-levels 0).
+std::atomic<bool> g_regions_inline{false};
+}  // namespace
 
 void use_threads(int n) {
   if (n < 1) throw std::invalid_argument("threads: " + std::to_string(n) + " is not allowed; at least 1");
@@ -21,6 +30,36 @@ void use_threads(int n) {
     vtkSMPTools::SetBackend(VTK_SMP_BACKEND);  // the build's default (Debian: TBB)
     vtkSMPTools::Initialize(n);
   }
+  g_regions_inline.store(n == 1, std::memory_order_relaxed);
 }
 
+bool parallel_regions_run_inline() { return g_regions_inline.load(std::memory_order_relaxed); }
+
 }  // namespace rsw::fem
+
+// GCC's entry point for `#pragma omp parallel` (libgomp's ABI since GCC 4.9: the
+// outlined body, its data, the requested thread count, proc_bind flags). The
+// executable's definition takes precedence over libgomp's for the shared libraries
+// too (ELF symbol interposition; the linker exports it because libcholmod refers to
+// it). After use_threads(1) every region is inactive, and libgomp would run it on a
+// team of one thread whose barriers still end with a futex wake-up system call: two
+// per region, and CHOLMOD's supernodal factorisation opens regions per supernode and
+// descendant (about 700 000 system calls per default weld, 10-12 % of its mechanics
+// time; docs/PERFORMANCE.md). Here such a region runs as the body called on this
+// thread, which is what OpenMP defines for code outside any parallel region: worksharing
+// loops, single, critical and tasks behave as orphaned constructs of one thread. Only
+// omp_get_level() inside the body differs (0 instead of 1). Otherwise the call goes
+// on to the OpenMP runtime's own definition.
+extern "C" void GOMP_parallel(void (*body)(void*), void* data, unsigned num_threads, unsigned flags) {
+  if (rsw::fem::parallel_regions_run_inline()) {
+    body(data);
+    return;
+  }
+  using Entry = void (*)(void (*)(void*), void*, unsigned, unsigned);
+  static const Entry runtime = reinterpret_cast<Entry>(dlsym(RTLD_NEXT, "GOMP_parallel"));
+  if (!runtime) {
+    std::fputs("rsw: the OpenMP runtime has no GOMP_parallel (not GCC's libgomp?)\n", stderr);
+    std::abort();
+  }
+  runtime(body, data, num_threads, flags);
+}

@@ -11,7 +11,9 @@
 // processors on every loop and spin in sched_yield after it (measured on the coarse
 // weld: 7657 reads of /sys/devices/system/cpu/online and 105 000 sched_yield calls, a
 // second thread busy for about 9 % of the run): one thread selects VTK's sequential
-// backend.
+// backend. And with one thread a parallel region runs without an OpenMP team at all
+// (threads.cpp, GOMP_parallel): a team of one still makes a futex system call at each
+// of its barriers.
 #pragma once
 
 namespace rsw::fem {
@@ -21,5 +23,9 @@ namespace rsw::fem {
 // a library's fixed thread request is cut to the cores the machine has free.
 // Throws std::invalid_argument for n < 1.
 void use_threads(int n);
+
+// True after use_threads(1): parallel regions, ours and the libraries', run as a call
+// of their body on the calling thread, without an OpenMP team.
+bool parallel_regions_run_inline();
 
 }  // namespace rsw::fem

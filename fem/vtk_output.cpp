@@ -135,25 +135,24 @@ void write_text_atomically(const fs::path& target, const std::string& text) {
   move_into_place(tmp, target);
 }
 
-// Writes one VTK dataset with a VTK XML writer through a temporary file.
+// Writes one VTK dataset with a VTK XML writer through a temporary file. The writer
+// fills a string first: writing the file directly, it makes a system call (write or
+// lseek) per data block header and array, about 570 per file (150 000 per coarse
+// weld), each several microseconds in a virtual machine.
 template <typename Writer, typename Data>
 void write_piece_atomically(const fs::path& target, Data* data) {
-  const fs::path tmp = temporary_name(target);
   vtkNew<Writer> writer;
   vtkNew<ErrorCollector> errors;
   writer->AddObserver(vtkCommand::ErrorEvent, errors);
   writer->SetInputData(data);
-  writer->SetFileName(tmp.string().c_str());
+  writer->WriteToOutputStringOn();
   writer->SetDataModeToAppended();
   writer->EncodeAppendedDataOff();
   writer->SetCompressorTypeToZLib();
   writer->SetHeaderTypeToUInt64();
-  if (writer->Write() != 1 || !errors->messages.empty()) {
-    std::error_code ec;
-    fs::remove(tmp, ec);
+  if (writer->Write() != 1 || !errors->messages.empty())
     throw std::runtime_error("cannot write " + quoted(target) + ": " + errors->messages);
-  }
-  move_into_place(tmp, target);
+  write_text_atomically(target, writer->GetOutputString());
 }
 
 vtkSmartPointer<vtkIntArray> int_array(const char* name, vtkIdType n) {

@@ -1,8 +1,10 @@
 // use_threads: a library's parallel region with a fixed thread request (as CHOLMOD's
 // supernodal factorisation has, num_threads(4)) runs on one thread when the process
-// asked for one.
+// asked for one, and then without an OpenMP team; the shared libraries reach that
+// entry point.
 #include "fem/threads.hpp"
 
+#include <dlfcn.h>
 #include <gtest/gtest.h>
 #include <omp.h>
 #include <vtkSMPTools.h>
@@ -27,6 +29,49 @@ TEST(Threads, OneThreadAlsoHoldsForALibrarysFixedThreadRequest) {
   rsw::fem::use_threads(1);
   EXPECT_EQ(omp_get_max_threads(), 1);
   EXPECT_EQ(threads_of_a_fixed_request_of_four(), 1);
+}
+
+// With one thread a region is its body called on this thread: no team (level 0, where
+// libgomp's inactive team of one reports level 1), every loop iteration done once.
+// With two threads the runtime forms a team again.
+TEST(Threads, OneThreadRunsAParallelRegionWithoutATeam) {
+  const auto region = [](int& level, int& iterations) {
+    level = -1;
+    iterations = 0;
+#pragma omp parallel num_threads(4)
+    {
+#pragma omp single
+      level = omp_get_level();
+#pragma omp for schedule(static) reduction(+ : iterations)
+      for (int i = 0; i < 100; ++i) iterations += 1;
+    }
+  };
+  int level = 0, iterations = 0;
+  rsw::fem::use_threads(1);
+  EXPECT_TRUE(rsw::fem::parallel_regions_run_inline());
+  region(level, iterations);
+  EXPECT_EQ(level, 0);
+  EXPECT_EQ(iterations, 100);
+  rsw::fem::use_threads(2);
+  EXPECT_FALSE(rsw::fem::parallel_regions_run_inline());
+  region(level, iterations);
+  EXPECT_EQ(level, 1);
+  EXPECT_EQ(iterations, 100);
+  rsw::fem::use_threads(1);
+}
+
+// The shared libraries (CHOLMOD) look GOMP_parallel up in the global scope, which
+// starts at the executable: they must find its definition, not libgomp's.
+TEST(Threads, SharedLibrariesFindTheExecutablesParallelEntryPoint) {
+  void* global = dlsym(RTLD_DEFAULT, "GOMP_parallel");
+  void* runtime = dlsym(RTLD_NEXT, "GOMP_parallel");
+  ASSERT_NE(global, nullptr);
+  ASSERT_NE(runtime, nullptr);
+  EXPECT_NE(global, runtime);
+  Dl_info where{};
+  ASSERT_NE(dladdr(global, &where), 0);
+  ASSERT_NE(dladdr(runtime, &where), 0);
+  EXPECT_NE(std::string(where.dli_fname).find("gomp"), std::string::npos) << where.dli_fname;
 }
 
 // VTK's loops (the .vtu writers) run sequentially on one thread: no TBB worker that
