@@ -26,7 +26,7 @@ void use_threads(int n) {
     vtkSMPTools::SetBackend("Sequential");
   } else {
     omp_set_max_active_levels(1);
-    omp_set_dynamic(1);
+    omp_set_dynamic(0);  // n means n: libgomp's adjustment would cut it by the load average
     vtkSMPTools::SetBackend(VTK_SMP_BACKEND);  // the build's default (Debian: TBB)
     vtkSMPTools::Initialize(n);
   }
@@ -48,8 +48,10 @@ bool parallel_regions_run_inline() { return g_regions_inline.load(std::memory_or
 // time; docs/PERFORMANCE.md). Here such a region runs as the body called on this
 // thread, which is what OpenMP defines for code outside any parallel region: worksharing
 // loops, single, critical and tasks behave as orphaned constructs of one thread. Only
-// omp_get_level() inside the body differs (0 instead of 1). Otherwise the call goes
-// on to the OpenMP runtime's own definition.
+// omp_get_level() inside the body differs (0 instead of 1). With n > 1 threads a
+// region asking for more than n (CHOLMOD's num_threads(4)) gets n, as OpenMP allows an
+// implementation to give fewer threads than requested, and the call goes on to the
+// OpenMP runtime's own definition.
 extern "C" void GOMP_parallel(void (*body)(void*), void* data, unsigned num_threads, unsigned flags) {
   if (rsw::fem::parallel_regions_run_inline()) {
     body(data);
@@ -61,5 +63,6 @@ extern "C" void GOMP_parallel(void (*body)(void*), void* data, unsigned num_thre
     std::fputs("rsw: the OpenMP runtime has no GOMP_parallel (not GCC's libgomp?)\n", stderr);
     std::abort();
   }
-  runtime(body, data, num_threads, flags);
+  const unsigned most = static_cast<unsigned>(omp_get_max_threads());
+  runtime(body, data, num_threads > most ? most : num_threads, flags);
 }

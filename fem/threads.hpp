@@ -4,9 +4,11 @@
 // supernodal factorisation with a fixed `num_threads(4)` clause, which ignores
 // omp_set_num_threads: on a 2-core machine a "one-thread" run then had four threads
 // taking turns, and a squeeze took 25-30 % longer than on one thread
-// (docs/PERFORMANCE.md). The only run-time controls OpenMP offers over such a clause
-// are the active-levels limit and dynamic adjustment (OpenMP 5.1, sections 2.6.1 and
-// 3.2.x), and use_threads sets them. VTK's own loops (vtkSMPTools, in the .vtu
+// (docs/PERFORMANCE.md). OpenMP's own run-time controls over such a clause are the
+// active-levels limit and dynamic adjustment (OpenMP 5.1, sections 2.6.1 and 3.2.x);
+// the latter also cuts our loops by the machine's load average, so rsw instead
+// defines the entry point of parallel regions itself (threads.cpp, GOMP_parallel) and
+// caps every region at the process's thread count. VTK's own loops (vtkSMPTools, in the .vtu
 // writers) run on TBB threads in Debian's build, which ask the system for the number of
 // processors on every loop and spin in sched_yield after it (measured on the coarse
 // weld: 7657 reads of /sys/devices/system/cpu/online and 105 000 sched_yield calls, a
@@ -19,8 +21,8 @@
 namespace rsw::fem {
 
 // n == 1: every parallel region, ours and the libraries', runs on the calling thread
-// (max-active-levels 0; VTK's sequential backend). n > 1: n threads for our loops, and dynamic adjustment on, so
-// a library's fixed thread request is cut to the cores the machine has free.
+// (max-active-levels 0, no OpenMP team; VTK's sequential backend). n > 1: n threads
+// for our loops, and a library's fixed request for more is cut to n.
 // Throws std::invalid_argument for n < 1.
 void use_threads(int n);
 
