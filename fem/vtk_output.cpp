@@ -149,6 +149,10 @@ void write_piece_atomically(const fs::path& target, Data* data) {
   writer->SetDataModeToAppended();
   writer->EncodeAppendedDataOff();
   writer->SetCompressorTypeToZLib();
+  // zlib's fastest level: the float fields barely compress at any level (a coarse
+  // weld's files: 6644 against 6616 kB at VTK's default 5), and it writes them in 11 %
+  // less time.
+  writer->SetCompressionLevel(1);
   writer->SetHeaderTypeToUInt64();
   if (writer->Write() != 1 || !errors->messages.empty())
     throw std::runtime_error("cannot write " + quoted(target) + ": " + errors->messages);

@@ -66,6 +66,11 @@ struct Mechanics::Impl {
   }
   std::unique_ptr<fem::Assembler> force_assembler, displacement_assembler;
   fem::PreconditionedGmres force_gmres, displacement_gmres;
+  // Trial tangent and residual of the Newton iterations, kept between calls: a fresh
+  // sparse matrix per call of iterate() copied the whole pattern (about 1 ms on the
+  // paper's mesh, once per step).
+  fem::SparseMatrix K_trial;
+  Eigen::VectorXd R_trial;
 
   int n_q;
   std::vector<Vector4> strain, trial_strain;  // per cell * n_q
@@ -721,8 +726,6 @@ struct Mechanics::Impl {
                   fem::SparseMatrix& K, Eigen::VectorXd& R, MechanicsStepReport& report) {
     fem::Constraints& cons = ctrl == Control::force ? force_constraints : displacement_constraints;
     fem::PreconditionedGmres& gmres = ctrl == Control::force ? force_gmres : displacement_gmres;
-    fem::SparseMatrix K_trial;
-    Eigen::VectorXd R_trial;
     const double shift = 1 - s;
     auto target = [&](const Eigen::VectorXd& r) -> Eigen::VectorXd { return shift == 0 ? r : r - shift * R0; };
     Eigen::VectorXd Rs = target(R);
