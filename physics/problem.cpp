@@ -238,6 +238,17 @@ ConfigSchema build_schema() {
       .range(Range::closed(1e-6, 1))
       .doc("Largest time step of the weld stage; every breakpoint of the current and force "
            "tables and every output time is also a step, so ramps are resolved.");
+  s.number("solver.early_time_step", "s", "ms").default_value("1 ms")
+      .range(Range::closed(1e-6, 1))
+      .doc("Largest time step from the weld start to solver.early_phase_end (not larger than "
+           "solver.time_step). The resistance features come from the first tens of "
+           "milliseconds, whose fast heating makes them the features most sensitive to the "
+           "step: on the paper's mesh R_beta is 262, 251, 243 uOhm at uniform steps of 1, 0.5, "
+           "0.25 ms, and 243 uOhm with 0.25 ms only over the first 30 ms (docs/VERIFICATION.md).");
+  s.number("solver.early_phase_end", "s", "ms").default_value("0 ms")
+      .range(Range::closed(0, 10000))
+      .doc("End of the early phase measured from the weld start (itself a step); 0: no early "
+           "phase, every step up to solver.time_step.");
   s.integer("solver.squeeze_force_steps").default_value("10")
       .range(Range::closed(1, 1000))
       .doc("Force-controlled steps of the squeeze, after seating (see docs/MECHANICS.md).");
@@ -496,6 +507,12 @@ Problem make_problem(const Config& config) {
 
   SolverSettings& solver = problem.solver;
   solver.time_step = config.number("solver.time_step");
+  solver.early_time_step = config.number("solver.early_time_step");
+  solver.early_phase_end = config.number("solver.early_phase_end");
+  if (solver.early_phase_end > 0 && solver.early_time_step > solver.time_step)
+    config.fail("solver.early_time_step",
+                "the early phase's step must not exceed solver.time_step (" + std::to_string(solver.time_step * 1e3) +
+                    " ms)");
   solver.squeeze_force_steps = config.integer("solver.squeeze_force_steps");
   solver.seat_step = config.number("solver.seat_step");
   solver.contact_penalty_factor = config.number("solver.contact_penalty_factor");

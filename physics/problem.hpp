@@ -65,6 +65,8 @@ struct ThermalParameters {
 
 struct SolverSettings {
   double time_step = 0;               // s, largest step of the weld stage
+  double early_time_step = 0;         // s, largest step up to early_phase_end
+  double early_phase_end = 0;         // s after the weld start; 0: no early phase
   int squeeze_force_steps = 0;        // force-controlled squeeze steps
   double seat_step = 0;               // m, seating travel per step
   double contact_penalty_factor = 0;  // -, eps_N = factor * E / h

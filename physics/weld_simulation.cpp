@@ -48,6 +48,8 @@ std::vector<double> weld_step_times(const Problem& problem) {
       if (t > 0 && t < end) breaks.insert(t);
   const double interval = problem.output.interval;
   for (int k = 1; k * interval < end - 1e-12; ++k) breaks.insert(k * interval);
+  const double early_end = problem.solver.early_phase_end;
+  if (early_end > 0 && early_end < end) breaks.insert(early_end);
   // Merge boundaries closer than a nanosecond (rounding of unit conversions).
   std::vector<double> b;
   for (double t : breaks)
@@ -55,7 +57,10 @@ std::vector<double> weld_step_times(const Problem& problem) {
   b.back() = end;
   std::vector<double> times{0.0};
   for (std::size_t i = 0; i + 1 < b.size(); ++i) {
-    const int n = std::max(1, static_cast<int>(std::ceil((b[i + 1] - b[i]) / problem.solver.time_step - 1e-9)));
+    const bool early = b[i + 1] <= early_end * (1 + 1e-12);
+    const double largest = early ? std::min(problem.solver.time_step, problem.solver.early_time_step)
+                                 : problem.solver.time_step;
+    const int n = std::max(1, static_cast<int>(std::ceil((b[i + 1] - b[i]) / largest - 1e-9)));
     for (int k = 1; k <= n; ++k) times.push_back(b[i] + (b[i + 1] - b[i]) * k / n);
   }
   return times;

@@ -35,7 +35,10 @@
 
 namespace rsw::physics {
 
-// Step boundaries of the weld stage (s), from 0 to the end time.
+// Step boundaries of the weld stage (s), from 0 to the end time: every breakpoint of
+// the current and force tables, every output time and the end of the early phase, and
+// in between equal steps no longer than solver.early_time_step (up to the early phase's
+// end) or solver.time_step (after it).
 std::vector<double> weld_step_times(const Problem& problem);
 
 struct Signals {

@@ -3,10 +3,12 @@
 // relation between keys is checked with a message naming the key the user set, and
 // docs/CONFIG.md is the current generated reference.
 #include "physics/problem.hpp"
+#include "physics/weld_simulation.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -153,6 +155,41 @@ TEST(Problem, ScheduleIsPiecewiseLinearAndHeldOutside) {
   EXPECT_NEAR(p.schedule.current.at(0.145), 4000.0, 1e-9);
   EXPECT_DOUBLE_EQ(p.schedule.current.at(0.155), 0.0);
   EXPECT_DOUBLE_EQ(p.schedule.force.at(0.5), 3000.0);
+}
+
+// The step schedule of the paper's case (breakpoints at the 10 and 140 ms ramp ends
+// and every 5 ms output): 160 steps of 1 ms; with an early phase of 0.25 ms steps to
+// 30 ms, 30 / 0.25 = 120 steps there and 130 of 1 ms after, 250 in all.
+TEST(Problem, EarlyPhaseHasItsOwnLargestStepAndEndsOnAStep) {
+  const auto steps_of = [](const std::vector<double>& times, double from, double to, double& longest) {
+    int n = 0;
+    longest = 0;
+    for (std::size_t k = 1; k < times.size(); ++k)
+      if (times[k] > from + 1e-12 && times[k] <= to + 1e-12) {
+        ++n;
+        longest = std::max(longest, times[k] - times[k - 1]);
+      }
+    return n;
+  };
+  double longest = 0;
+  EXPECT_EQ(weld_step_times(load_problem(paper_case)).size(), 161u);
+  const auto times = weld_step_times(
+      load_problem(paper_case, {"solver.early_time_step=0.25 ms", "solver.early_phase_end=30 ms"}));
+  ASSERT_EQ(times.size(), 251u);
+  EXPECT_EQ(steps_of(times, 0, 0.030, longest), 120);
+  EXPECT_NEAR(longest, 0.25e-3, 1e-12);
+  EXPECT_EQ(steps_of(times, 0.030, 0.160, longest), 130);
+  EXPECT_NEAR(longest, 1e-3, 1e-12);
+  EXPECT_NE(std::find_if(times.begin(), times.end(), [](double t) { return std::abs(t - 0.030) < 1e-12; }),
+            times.end());
+}
+
+TEST(Problem, EarlyStepLongerThanTheStepIsRejectedNamingBoth) {
+  const std::string message = error_of([] {
+    load_problem(paper_case, {"solver.early_time_step=1 ms", "solver.time_step=0.5 ms", "solver.early_phase_end=20 ms"});
+  });
+  EXPECT_HAS(message, "solver.early_time_step");
+  EXPECT_HAS(message, "solver.time_step");
 }
 
 TEST(Problem, SetOverridesScalarListItemAndTable) {
