@@ -77,6 +77,24 @@ const fs::path& coarse_run() {
   }();
   return dir;
 }
+
+// The features (rsw features on its signals.csv) of a coarse signals-only run of the
+// paper case with the extra options `sets`, written into `dir`; `summary` receives its
+// summary.json when given.
+nlohmann::json coarse_features(const fs::path& dir, const std::string& sets, nlohmann::json* summary = nullptr) {
+  std::string out;
+  const int status = run_rsw("simulate " + paper_case + " -q -o " + dir.string() + coarse_signals_only + sets, out);
+  EXPECT_EQ(status, 0) << out;
+  std::string fout;
+  EXPECT_EQ(run_rsw("features " + (dir / "signals.csv").string() + " -o " + (dir / "features.json").string(), fout), 0)
+      << fout;
+  std::ifstream fin(dir / "features.json");
+  if (summary) {
+    std::ifstream sin(dir / "summary.json");
+    *summary = nlohmann::json::parse(sin);
+  }
+  return nlohmann::json::parse(fin).at("features");
+}
 }  // namespace
 
 TEST(WeldRun, CoarseRunMatchesStoredReference) {
@@ -324,19 +342,11 @@ TEST(WeldRun, FoldedCellFailsTheRunSayingWhereAndWhen) {
 TEST(WeldRun, NumericalNoiseInP1IsSmallAgainstTheChangeOverThePrior) {
   const fs::path base = fs::temp_directory_path() / ("rsw_smooth_" + std::to_string(::getpid()));
   auto features_at = [&](double p1, const std::string& tag) {
-    const fs::path dir = base / tag;
-    std::string out;
     char value[32];
     std::snprintf(value, sizeof value, "%.12g", p1);
-    const int status = run_rsw("simulate " + paper_case + " -q -o " + dir.string() + coarse_signals_only +
-                                   " --set contact.electrode_sheet.htc_p1=" + value, out);
-    EXPECT_EQ(status, 0) << out;
-    std::string fout;
-    EXPECT_EQ(run_rsw("features " + (dir / "signals.csv").string() + " -o " + (dir / "features.json").string(), fout),
-              0) << fout;
-    std::ifstream fin(dir / "features.json"), sin(dir / "summary.json");
-    const auto features = nlohmann::json::parse(fin).at("features");
-    const auto summary = nlohmann::json::parse(sin);
+    nlohmann::json summary;
+    const auto features =
+        coarse_features(base / tag, std::string(" --set contact.electrode_sheet.htc_p1=") + value, &summary);
     return std::array<double, 3>{features.at("R_gamma").at("value").get<double>(),
                                  features.at("T_max").at("value").get<double>(),
                                  summary.at("nugget").at("d_n_sol").get<double>()};
@@ -371,16 +381,8 @@ TEST(WeldRun, ResistanceFeaturesConvergeAtFirstOrderInTheTimeStep) {
   const fs::path base = fs::temp_directory_path() / ("rsw_dt_" + std::to_string(::getpid()));
   const char* names[] = {"R_beta", "R_m"};
   auto features_at = [&](const std::string& step) {
-    const fs::path dir = base / step;
-    std::string out;
-    const int status = run_rsw("simulate " + paper_case + " -q -o " + dir.string() + coarse_signals_only +
-                                   " --set solver.early_phase_end=0ms --set solver.time_step=" + step + "ms", out);
-    EXPECT_EQ(status, 0) << out;
-    std::string fout;
-    EXPECT_EQ(run_rsw("features " + (dir / "signals.csv").string() + " -o " + (dir / "features.json").string(), fout),
-              0) << fout;
-    std::ifstream fin(dir / "features.json");
-    const auto features = nlohmann::json::parse(fin).at("features");
+    const auto features =
+        coarse_features(base / step, " --set solver.early_phase_end=0ms --set solver.time_step=" + step + "ms");
     return std::array<double, 2>{features.at(names[0]).at("value").get<double>(),
                                  features.at(names[1]).at("value").get<double>()};
   };
