@@ -265,9 +265,12 @@ TEST(WeldRun, ThermalNewtonConvergesThroughTheMeltingOnsetAtAResistiveSheetFilm)
 // cores) as a check of robustness: a solver change that leaves the default weld equal
 // to 10⁻⁶ can still change which runs of the prior finish. Every run it fails must have
 // melted an electrode first (the resistive end of the E/S film prior, outside the
-// model), and few do: 9 or 10 of 90 with the builds of 2026-11-25, 19 with the thermal
-// chord policy that stalled at melting onsets (one of them, design point 58, with no
-// melting electrode), found only by rerunning the study (docs/STUDIES.md).
+// model), and few do: 9 or 10 of 90 with the builds of 2026-11-25 and uniform 1 ms
+// steps, 15 with the early phase of 0.25 ms steps (six more runs whose electrode melts
+// stop in the mechanics during it; on the paper's mesh the early phase takes the study
+// from 19 to 14 failures), 19 with the thermal chord policy that stalled at melting
+// onsets (one of them, design point 58, with no melting electrode), found only by
+// rerunning the study (docs/STUDIES.md).
 TEST(WeldRun, CoarseTableOneStudyFailsOnlyRunsWhoseElectrodeMelted) {
   const fs::path dir = fs::temp_directory_path() / ("rsw_study_" + std::to_string(::getpid()));
   std::string out;
@@ -279,7 +282,7 @@ TEST(WeldRun, CoarseTableOneStudyFailsOnlyRunsWhoseElectrodeMelted) {
   std::smatch done;
   ASSERT_TRUE(std::regex_search(out, done, std::regex(R"(90/90 runs done .*, (\d+) failed)"))) << out;
   const int failed = std::stoi(done[1]);
-  EXPECT_LE(failed, 12) << out;
+  EXPECT_LE(failed, 16) << out;
   int reasons = 0;
   std::istringstream lines(out);
   for (std::string line; std::getline(lines, line);)
