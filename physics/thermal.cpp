@@ -630,14 +630,20 @@ ThermalStepReport Thermal::solve(double dt, const std::vector<fem::Point>& posit
     refactor = it > 1 && step_norm > 0.25 * previous_norm;
     previous_norm = step_norm;
     // Backtracking on |R|₂ while the step is large (the S-shaped enthalpy of a narrow
-    // melting range can make full Newton steps cycle); small steps are taken whole.
+    // melting range can make full Newton steps cycle); steps within 100 times the
+    // strict tolerance (round-off level) are taken whole. "Large" is measured against
+    // the strict tolerance even when this solve's own is looser: with the coupling's
+    // loosest 0.1 K, 100 × 0.1 K = 10 K steps went unchecked, as wide as copper's
+    // melting range, and a lower-electrode node cycled 1066 → 1079 → 1066 °C for 40
+    // iterations (coarse Table I study, run 39, with a hardened copper).
     const Eigen::VectorXd base = m.T;
     const double norm0 = m.F.norm();
+    const double whole_step = 100 * std::min(tolerance, m.settings.temperature_tolerance);
     double alpha = 1.0;
     for (int ls = 0; ls < 8; ++ls) {
       m.T = base + alpha * step;
       m.evaluate(refactor);
-      if (step_norm <= 100 * tolerance || m.F.norm() <= (1 - 1e-4 * alpha) * norm0 || ls == 7) break;
+      if (step_norm <= whole_step || m.F.norm() <= (1 - 1e-4 * alpha) * norm0 || ls == 7) break;
       alpha *= 0.5;
     }
     report.correction = alpha * step_norm;

@@ -526,22 +526,22 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
           it += coupling.iterations;
           if (coupling.converged || !coupling_failure.empty()) break;
         }
+        // A failed coupling says what failed; where an electrode is melting at that
+        // point, the failure names it first (the likely cause) and keeps the solver's
+        // own message after it.
         if (!coupling.converged) {
-          if (const std::string melting = electrode_melting(thermal.temperature()); !melting.empty())
-            return fail("weld stage, step " + std::to_string(k) + " (t = " + std::to_string(t * 1e3) + " ms): " +
-                        melting);
-        }
-        if (!coupling.converged)
+          const std::string solver_failure =
+              coupling_failure.empty()
+                  ? "electro-thermal coupling did not converge in " +
+                        std::to_string(problem.solver.max_coupling_iterations) + " iterations, also" +
+                        (other_depth != depth ? " with Anderson depth " + std::to_string(other_depth) + " and"
+                                              : std::string()) +
+                        " with damping 0.7 and 0.4 (last change " + std::to_string(coupling.change) + " K)"
+                  : coupling_failure;
+          const std::string melting = electrode_melting(thermal.temperature());
           return fail("weld stage, step " + std::to_string(k) + " (t = " + std::to_string(t * 1e3) + " ms), " +
-                      (coupling_failure.empty()
-                           ? "electro-thermal coupling did not converge in " +
-                                 std::to_string(problem.solver.max_coupling_iterations) +
-                                 " iterations, also" +
-                                 (other_depth != depth ? " with Anderson depth " + std::to_string(other_depth) + " and"
-                                                       : std::string()) +
-                                 " with damping 0.7 and 0.4 (last change " +
-                                 std::to_string(coupling.change) + " K)"
-                           : coupling_failure));
+                      (melting.empty() ? solver_failure : melting + "; there " + solver_failure));
+        }
       }
       T_iter = thermal.temperature();
       if (std::isnan(result.electrode_melting_time))

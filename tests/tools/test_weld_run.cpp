@@ -261,6 +261,37 @@ TEST(WeldRun, ThermalNewtonConvergesThroughTheMeltingOnsetAtAResistiveSheetFilm)
   fs::remove_all(dir);
 }
 
+// Design point 20 of the coarse Table I study (a resistive E/S film: t_f,E/S =
+// 1.5·10⁻⁵ m, ρ_c,E/S = 1.6·10⁻⁵ Ω·m) melts the upper electrode's face at 9.8 ms and
+// goes on (solver.electrode_melting = continue). At 18.5 ms the thermal Newton
+// iteration of a loose coupling iterate (tolerance 0.1 K) cycled for 40 iterations
+// with corrections of about 8 K: corrections below 100 times the solve's tolerance
+// were taken whole without the descent check, and 10 K is as wide as copper's melting
+// range, where the S-shaped enthalpy sends a full step past the root. The descent check
+// now skips only corrections within 100 times the strict tolerance, and the weld
+// finishes. (~3.5 s, the whole coarse weld as in the study.)
+TEST(WeldRun, ThermalNewtonChecksDescentOfCorrectionsAsWideAsAMeltingRange) {
+  const fs::path dir = fs::temp_directory_path() / ("rsw_point20_" + std::to_string(::getpid()));
+  std::string out;
+  EXPECT_EQ(run_rsw("simulate " + paper_case + " -q -o " + dir.string() + coarse_signals_only +
+                        " --set output.interval=1ms"
+                        " --set contact.sheet_sheet.film_thickness=2.404566119469432e-07m"
+                        " --set \"contact.sheet_sheet.coating_resistivity=8.6811045628913567e-07 ohm*m\""
+                        " --set contact.electrode_sheet.film_thickness=1.4596888669164112e-05m"
+                        " --set \"contact.electrode_sheet.coating_resistivity=1.5741863193175545e-05 ohm*m\""
+                        " --set contact.electrode_sheet.htc_p1=0.043405289627226999"
+                        " --set \"thermal.melt_conductivity=142.25126753931374 W/(m*K)\"",
+                    out),
+            0)
+      << out;
+  const auto run = read_csv(dir / "signals.csv");
+  EXPECT_NEAR(run.at("time [s]").back(), 0.160, 1e-9);  // the whole schedule
+  std::ifstream summary(dir / "summary.json");
+  const std::string text((std::istreambuf_iterator<char>(summary)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("a melting electrode is outside the model"), std::string::npos);  // the warning stays
+  fs::remove_all(dir);
+}
+
 // The coarse Table I study (90 welds over the paper's prior, about 2.5 min on two
 // cores) as a check of robustness: a solver change that leaves the default weld equal
 // to 10⁻⁶ can still change which runs of the prior finish. Every run it fails must have
@@ -268,9 +299,11 @@ TEST(WeldRun, ThermalNewtonConvergesThroughTheMeltingOnsetAtAResistiveSheetFilm)
 // model), and few do: 9 or 10 of 90 with the builds of 2026-11-25 and uniform 1 ms
 // steps, 15 with the early phase of 0.25 ms steps (six more runs whose electrode melts
 // stop in the mechanics during it; on the paper's mesh the early phase takes the study
-// from 19 to 14 failures), 19 with the thermal chord policy that stalled at melting
-// onsets (one of them, design point 58, with no melting electrode), found only by
-// rerunning the study (docs/STUDIES.md).
+// from 19 to 14 failures), 11 since the thermal Newton iteration checks the descent of
+// corrections as wide as copper's melting range (four runs had stalled in loose
+// coupling iterates at a melting electrode; test above), 19 with the thermal chord
+// policy that stalled at melting onsets (one of them, design point 58, with no melting
+// electrode), found only by rerunning the study (docs/STUDIES.md).
 TEST(WeldRun, CoarseTableOneStudyFailsOnlyRunsWhoseElectrodeMelted) {
   const fs::path dir = fs::temp_directory_path() / ("rsw_study_" + std::to_string(::getpid()));
   std::string out;
@@ -282,7 +315,7 @@ TEST(WeldRun, CoarseTableOneStudyFailsOnlyRunsWhoseElectrodeMelted) {
   std::smatch done;
   ASSERT_TRUE(std::regex_search(out, done, std::regex(R"(90/90 runs done .*, (\d+) failed)"))) << out;
   const int failed = std::stoi(done[1]);
-  EXPECT_LE(failed, 16) << out;
+  EXPECT_LE(failed, 12) << out;
   int reasons = 0;
   std::istringstream lines(out);
   for (std::string line; std::getline(lines, line);)
