@@ -278,10 +278,11 @@ ConfigSchema build_schema() {
       .doc("Width of the quadratic start of the C1 penalty contact law: contact stiffens over this much "
            "penetration, of the order of the surface roughness (cold-rolled sheet and dressed caps: Ra about "
            "1 um). Narrower widths make Newton cycle where contact points open and close in the melt.");
-  s.number("solver.coupling_tolerance", "degC", "degC").default_value("1e-2 degC")
+  s.number("solver.coupling_tolerance", "K", "K").default_value("1e-2 K")
       .range(Range::closed(1e-9, 10))
       .doc("Electro-thermal coupling iterations stop when no nodal temperature changes by "
-           "more than this between iterations.");
+           "more than this between iterations (a temperature difference: give it in K; a value in degC "
+           "is read as an absolute temperature and rejected by the range).");
   s.integer("solver.max_coupling_iterations").default_value("60")
       .range(Range::closed(1, 1000))
       .doc("Cap on the electro-thermal coupling iterations of one time step; reaching it "
