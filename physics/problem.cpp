@@ -294,6 +294,15 @@ ConfigSchema build_schema() {
            "which diverges where the current crowds into a heating contact edge. A step that does "
            "not converge is retried with depth 2 (5 if 2 is set), then damped by 0.7 and 0.4.");
 
+  s.number("solver.mechanics_tolerance", "1", "1").default_value("1e-6")
+      .range(Range::closed(1e-12, 1e-2))
+      .doc("Newton iterations of the mechanics stop when no out-of-balance nodal force exceeds this "
+           "fraction of the electrode force (1e-6 of 3 kN: 3 mN).");
+  s.number("solver.mechanics_error_estimate", "m", "nm").default_value("1 nm")
+      .range(Range::closed(0, 1e3))
+      .doc("A mechanics step also ends once Newton contracts superlinearly and the estimated remaining "
+           "displacement error |du_k|^2/|du_k-1| is below this, with the out-of-balance force within "
+           "100 times its tolerance (0: off). 1 nm is a thousandth of the contact smoothing width.");
   s.choice("solver.electrode_melting", {"continue", "stop"}).default_value("continue")
       .doc("When an electrode node first reaches the solidus of its material (the electrode face "
            "melts: sticking, outside what the model represents): continue records a warning with "
@@ -526,6 +535,8 @@ Problem make_problem(const Config& config) {
   solver.coupling_tolerance = config.number("solver.coupling_tolerance");
   solver.max_coupling_iterations = config.integer("solver.max_coupling_iterations");
   solver.coupling_acceleration_depth = config.integer("solver.coupling_acceleration_depth");
+  solver.mechanics_tolerance = config.number("solver.mechanics_tolerance");
+  solver.mechanics_error_estimate = config.number("solver.mechanics_error_estimate");
 
   problem.output.directory = config.text("output.directory");
   if (problem.output.directory.empty()) {

@@ -76,6 +76,8 @@ struct SolverSettings {
   double coupling_tolerance = 0;      // K, electro-thermal fixed-point tolerance
   int max_coupling_iterations = 0;
   int coupling_acceleration_depth = 5;  // Anderson depth (0: plain fixed-point iteration)
+  double mechanics_tolerance = 0;     // -, Newton's residual tolerance relative to the electrode force
+  double mechanics_error_estimate = 0;  // m, Newton's estimated remaining displacement error that ends a step
   bool stop_on_electrode_melting = false;  // fail the run when an electrode reaches its solidus
 };
 

@@ -181,6 +181,8 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
   ms.penalty_factor = problem.solver.contact_penalty_factor;
   ms.contact_smoothing = problem.solver.contact_smoothing;
   ms.tangential_penalty_ratio = problem.solver.friction_penalty_ratio;
+  ms.residual_tolerance = problem.solver.mechanics_tolerance;
+  ms.error_estimate_tolerance = problem.solver.mechanics_error_estimate;
   if (problem.solver.two_pass_sheet_contact)
     for (const auto& [name, pair] : mesh.interfaces)
       if (name.rfind("ss_", 0) == 0) ms.two_pass_interfaces.push_back(name);
