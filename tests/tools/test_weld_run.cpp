@@ -37,6 +37,19 @@ int run_rsw(const std::string& args, std::string& output) {
   return WEXITSTATUS(pclose(pipe.release()));
 }
 
+// The --set arguments of one design point of the Table I studies: the six parameters
+// with the keys and units of validation/studies/table1_lhs90*.yaml (film thicknesses
+// in m, resistivities in ohm*m, λ_m in W/(m*K)).
+std::string table_one_point(const std::string& tf_ss, const std::string& rho_ss, const std::string& tf_es,
+                            const std::string& rho_es, const std::string& p1, const std::string& lambda_m) {
+  return " --set contact.sheet_sheet.film_thickness=" + tf_ss + "m" +
+         " --set \"contact.sheet_sheet.coating_resistivity=" + rho_ss + " ohm*m\"" +
+         " --set contact.electrode_sheet.film_thickness=" + tf_es + "m" +
+         " --set \"contact.electrode_sheet.coating_resistivity=" + rho_es + " ohm*m\"" +
+         " --set contact.electrode_sheet.htc_p1=" + p1 + " --set \"thermal.melt_conductivity=" + lambda_m +
+         " W/(m*K)\"";
+}
+
 // The reason a failed run wrote into its partial folder (run folder + ".partial").
 std::string failure_reason(const fs::path& dir) {
   std::ifstream in(fs::path(dir.string() + ".partial") / "failure.txt");
@@ -246,13 +259,10 @@ TEST(WeldRun, ThermalNewtonConvergesThroughTheMeltingOnsetAtAResistiveSheetFilm)
   const fs::path dir = fs::temp_directory_path() / ("rsw_point58_" + std::to_string(::getpid()));
   std::string out;
   EXPECT_EQ(run_rsw("simulate " + paper_case + " -q -o " + dir.string() + coarse_signals_only +
-                        " --set output.interval=1ms"
-                        " --set contact.sheet_sheet.film_thickness=8.7696639927009923e-05m"
-                        " --set \"contact.sheet_sheet.coating_resistivity=1.6688925344824186e-06 ohm*m\""
-                        " --set contact.electrode_sheet.film_thickness=4.9795985381882547e-07m"
-                        " --set \"contact.electrode_sheet.coating_resistivity=5.5068530847861315e-07 ohm*m\""
-                        " --set contact.electrode_sheet.htc_p1=0.010228694543108116"
-                        " --set \"thermal.melt_conductivity=161.21747493158483 W/(m*K)\"",
+                        " --set output.interval=1ms" +
+                        table_one_point("8.7696639927009923e-05", "1.6688925344824186e-06",
+                                        "4.9795985381882547e-07", "5.5068530847861315e-07",
+                                        "0.010228694543108116", "161.21747493158483"),
                     out),
             0)
       << out;
@@ -274,13 +284,10 @@ TEST(WeldRun, ThermalNewtonChecksDescentOfCorrectionsAsWideAsAMeltingRange) {
   const fs::path dir = fs::temp_directory_path() / ("rsw_point20_" + std::to_string(::getpid()));
   std::string out;
   EXPECT_EQ(run_rsw("simulate " + paper_case + " -q -o " + dir.string() + coarse_signals_only +
-                        " --set output.interval=1ms"
-                        " --set contact.sheet_sheet.film_thickness=2.404566119469432e-07m"
-                        " --set \"contact.sheet_sheet.coating_resistivity=8.6811045628913567e-07 ohm*m\""
-                        " --set contact.electrode_sheet.film_thickness=1.4596888669164112e-05m"
-                        " --set \"contact.electrode_sheet.coating_resistivity=1.5741863193175545e-05 ohm*m\""
-                        " --set contact.electrode_sheet.htc_p1=0.043405289627226999"
-                        " --set \"thermal.melt_conductivity=142.25126753931374 W/(m*K)\"",
+                        " --set output.interval=1ms" +
+                        table_one_point("2.404566119469432e-07", "8.6811045628913567e-07",
+                                        "1.4596888669164112e-05", "1.5741863193175545e-05",
+                                        "0.043405289627226999", "142.25126753931374"),
                     out),
             0)
       << out;
@@ -345,13 +352,10 @@ TEST(WeldRun, FoldedCellFailsTheRunSayingWhereAndWhen) {
   std::string out;
   EXPECT_NE(run_rsw("simulate " + paper_case + " -q -o " + dir.string() +
                         " --set output.fields=false --set solver.sheet_contact=one_pass --set solver.early_phase_end=0ms"
-                        " --set contact.sheet_sheet.film_thickness=5.6475400103189882e-05m"
-                        " --set \"contact.sheet_sheet.coating_resistivity=1.8492459486106656e-05 ohm*m\""
-                        " --set contact.electrode_sheet.film_thickness=2.5620235367893057e-07m"
-                        " --set \"contact.electrode_sheet.coating_resistivity=5.9803569934488761e-07 ohm*m\""
-                        " --set contact.electrode_sheet.htc_p1=0.0044651318755885372"
-                        " --set contact.sheet_sheet.htc_p1=0.0044651318755885372"
-                        " --set \"thermal.melt_conductivity=86.956956302646873 W/(m*K)\"",
+                        " --set contact.sheet_sheet.htc_p1=0.0044651318755885372" +
+                        table_one_point("5.6475400103189882e-05", "1.8492459486106656e-05",
+                                        "2.5620235367893057e-07", "5.9803569934488761e-07",
+                                        "0.0044651318755885372", "86.956956302646873"),
                     out),
             0);
   const std::string failure = failure_reason(dir);
