@@ -169,7 +169,7 @@ TEST(MaterialLibrary, EnvironmentDirectoriesComeFirstAndShadowShippedFiles) {
   EXPECT_EQ(directories[1], "/nonexistent_rsw_dir");
   EXPECT_EQ(directories[2], shipped_directory);
   EXPECT_DOUBLE_EQ(library.load("DP1200").strength_floor(), 7e6);
-  EXPECT_DOUBLE_EQ(library.load("CuCrZr").strength_floor(), 2e6);
+  EXPECT_DOUBLE_EQ(library.load("CuCrZr").strength_floor(), 34.2e6);
 }
 
 TEST(MaterialFile, BadTableNamesFileLineAndKey) {

@@ -308,9 +308,12 @@ TEST(WeldRun, ThermalNewtonChecksDescentOfCorrectionsAsWideAsAMeltingRange) {
 // stop in the mechanics during it; on the paper's mesh the early phase takes the study
 // from 19 to 14 failures), 11 since the thermal Newton iteration checks the descent of
 // corrections as wide as copper's melting range (four runs had stalled in loose
-// coupling iterates at a melting electrode; test above), 19 with the thermal chord
-// policy that stalled at melting onsets (one of them, design point 58, with no melting
-// electrode), found only by rerunning the study (docs/STUDIES.md).
+// coupling iterates at a melting electrode; test above), 2 since the electrode alloy
+// keeps its 900 °C mechanical properties above 900 °C instead of softening into a melt
+// (materials/data/CuCrZr.yaml; the other nine had folded or stalled at a sinking
+// electrode face), 19 with the thermal chord policy that stalled at melting onsets (one
+// of them, design point 58, with no melting electrode), found only by rerunning the
+// study (docs/STUDIES.md).
 TEST(WeldRun, CoarseTableOneStudyFailsOnlyRunsWhoseElectrodeMelted) {
   const fs::path dir = fs::temp_directory_path() / ("rsw_study_" + std::to_string(::getpid()));
   std::string out;
@@ -322,7 +325,7 @@ TEST(WeldRun, CoarseTableOneStudyFailsOnlyRunsWhoseElectrodeMelted) {
   std::smatch done;
   ASSERT_TRUE(std::regex_search(out, done, std::regex(R"(90/90 runs done .*, (\d+) failed)"))) << out;
   const int failed = std::stoi(done[1]);
-  EXPECT_LE(failed, 12) << out;
+  EXPECT_LE(failed, 4) << out;
   int reasons = 0;
   std::istringstream lines(out);
   for (std::string line; std::getline(lines, line);)
