@@ -83,7 +83,8 @@ struct SolverSettings {
 
 struct OutputSettings {
   std::string directory;
-  double interval = 0;  // s, between output steps
+  double interval = 0;  // s, between output steps (signals)
+  double field_interval = 0;  // s, between field outputs, a multiple of interval
   bool fields = false;  // write .vtu field files
 };
 

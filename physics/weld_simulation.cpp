@@ -311,6 +311,14 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
     const Eigen::VectorXd& pk = thermal.peak_temperature();
     return std::vector<double>(pk.data(), pk.data() + pk.size());
   };
+  // Fields at the first output step, then at output steps at least
+  // output.field_interval after the last field output, and at the last step.
+  double last_field_output = -std::numeric_limits<double>::infinity();
+  auto is_field_output = [&](double t) {
+    if (t < last_field_output + problem.output.field_interval - 1e-9 && t < times.back() - 1e-12) return false;
+    last_field_output = t;
+    return true;
+  };
   auto record = [&](double t) {
     const auto states = mech.interface_states();
     const Eigen::VectorXd& T = thermal.committed_temperature();
@@ -343,7 +351,7 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
     }
     for (std::size_t c = 0; c < row.size(); ++c) sig.columns[c].push_back(row[c]);
     output_times.push_back(t);
-    if (!series) return;
+    if (!series || !is_field_output(t)) return;
     fem::FieldSet fields;
     const Eigen::VectorXd u = mech.displacement();
     fields.add_point_vector("displacement", std::vector<double>(u.data(), u.data() + u.size()));

@@ -288,6 +288,11 @@ void print_features(const FeaturesOptions& options) {
   std::printf("features of %s\n", options.signal_file.c_str());
   std::printf("  weld stage %.2f .. %.2f ms, peak current %.3f kA\n", stage.start * 1e3, stage.end * 1e3,
               stage.peak_current * 1e-3);
+  const double raw_step = cal::median_step(signal.time());
+  std::printf("  feature grid %g ms (signal sampled every %g ms)%s\n", settings.resample_step * 1e3, raw_step * 1e3,
+              raw_step > 1.5 * settings.resample_step
+                  ? ": coarser than the grid, so what lies between samples (a resistance peak) is lost"
+                  : "");
   Json features = Json::object();
   for (std::size_t k = 0; k < values.size(); ++k) {
     const std::string& name = values.names()[k];
@@ -308,6 +313,8 @@ void print_features(const FeaturesOptions& options) {
   if (options.json_file.empty()) return;
   Json root = {{"file", options.signal_file},
                {"weld_stage", {{"start", stage.start}, {"end", stage.end}, {"peak_current", stage.peak_current}}},
+               {"feature_grid_step", settings.resample_step},
+               {"signal_step", raw_step},
                {"units", "SI (temperatures in degC); times from the weld start, weld_stage on the record's clock"},
                {"features", features}};
   const fs::path json_path(options.json_file);

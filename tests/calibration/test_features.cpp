@@ -181,6 +181,48 @@ TEST(Resampling, LinearInterpolationOntoGridAnchoredAtAGivenTime) {
   EXPECT_THROW(signal.column("voltage"), SignalError);
 }
 
+// The Savitzky–Golay window counts samples, so the grid the signals are resampled on
+// sets the span it smooths over. With the fixed 1 ms grid a weld sampled every 0.25 ms
+// and the same weld sampled every 0.05 ms give the same features (with the 50 %
+// current threshold the weld starts at 10 ms, a sample of both, and so is every grid
+// point after it); with
+// each signal's own step as the grid (0.05 ms: 0.55 ms window; 0.25 ms: 2.75 ms) a
+// sharp resistance peak, a Gaussian of 1.5 ms width on a falling line here, is
+// flattened by different amounts.
+TEST(Features, OfOneWeldDoNotDependOnHowFinelyItIsSampled) {
+  auto sampled_every = [](double step) {
+    const int n = static_cast<int>(std::lround(record_end / step)) + 1;
+    Eigen::VectorXd time(n), current(n), resistance(n);
+    for (int i = 0; i < n; ++i) {
+      time[i] = i * step;
+      current[i] = weld_current(time[i]);
+      const double x = (time[i] - weld_start - 20e-3) / 1.5e-3;
+      resistance[i] = 150e-6 + 100e-6 * std::exp(-x * x) - 0.2e-3 * (time[i] - weld_start);
+    }
+    Signal signal(time);
+    signal.add_column(signal_column::current, "A", current);
+    signal.add_column(signal_column::resistance, "ohm", resistance);
+    return signal;
+  };
+  const Signal coarse = sampled_every(0.25e-3), fine = sampled_every(0.05e-3);
+  const FeatureSettings grid = half_current_threshold();  // and the default 1 ms grid
+  EXPECT_DOUBLE_EQ(grid.resample_step, 1e-3);
+  const FeatureValues a = extract_features(coarse, grid), b = extract_features(fine, grid);
+  for (const char* name : {feature_name::resistance_beta, feature_name::time_beta, feature_name::resistance_alpha,
+                           feature_name::resistance_mean}) {
+    EXPECT_NEAR(a.at(name), b.at(name), 1e-9 * std::abs(a.at(name))) << name;
+  }
+  // The 1 ms grid's 11 ms window flattens the peak (246 µΩ at 20 ms after the weld
+  // start) but keeps it above the line under it (146 µΩ there).
+  EXPECT_LT(a.at(feature_name::resistance_beta), 246e-6);
+  EXPECT_GT(a.at(feature_name::resistance_beta), 146e-6);
+  FeatureSettings own_step = half_current_threshold();
+  own_step.resample_step = 0;  // each signal's median step
+  const double coarse_own = extract_features(coarse, own_step).at(feature_name::resistance_beta);
+  const double fine_own = extract_features(fine, own_step).at(feature_name::resistance_beta);
+  EXPECT_GT(std::abs(fine_own - coarse_own), 0.005 * fine_own) << fine_own << " " << coarse_own;
+}
+
 TEST(SmoothCurve, ReproducesCubicBetweenSamplesWithExtremaOffTheGrid) {
   // y = −(t − 0.37)² (t − 2) = −t³ + 2.74 t² − 1.6169 t + 0.2738: critical points where
   // 3t² − 5.48 t + 1.6169 = 0, a minimum at 0.37 and a maximum at 4.37/3.
