@@ -18,6 +18,13 @@
 // |u_{k+1} − u_k|_∞ ≤ tolerance, in the units of u. On success `u` holds the last
 // point G was evaluated at (u_k), so the caller's state from that evaluation (G(u_k)
 // and whatever produced it) belongs to the returned point.
+//
+// With `estimate_error`, the iteration also stops once the change is estimated to be
+// converged (Deuflhard, Newton Methods for Nonlinear Problems, Springer 2004, §2.1.2,
+// for a linearly contracting sequence): after two successive contractions
+// θ_k = c_k / c_{k−1} ≤ 1/2 of the changes c_k = |G(u_k) − u_k|_∞, the distance of G(u_k)
+// from the fixed point is about θ_k c_k / (1 − θ_k), and when that is at most
+// `tolerance` the evaluation that would only confirm it is saved.
 #pragma once
 
 #include <Eigen/Dense>
@@ -32,12 +39,14 @@ struct FixedPointSettings {
   double tolerance = 1e-8;   // on |u_{k+1} − u_k|_∞, units of u
   int max_iterations = 50;   // evaluations of G
   double damping = 1.0;      // β in (0, 1]; 1 = undamped
+  bool estimate_error = false;  // also stop on the contraction estimate (above)
 };
 
 struct FixedPointReport {
   bool converged = false;
   int iterations = 0;        // evaluations of G
   double change = 0;         // |u_{k+1} − u_k|_∞ of the last iteration
+  bool estimated = false;    // converged on the contraction estimate (estimate_error)
   std::string message;       // why it stopped, if not converged
 };
 

@@ -281,8 +281,10 @@ ConfigSchema build_schema() {
   s.number("solver.coupling_tolerance", "K", "K").default_value("1e-2 K")
       .range(Range::closed(1e-9, 10))
       .doc("Electro-thermal coupling iterations stop when no nodal temperature changes by "
-           "more than this between iterations (a temperature difference: give it in K; a value in degC "
-           "is read as an absolute temperature and rejected by the range).");
+           "more than this between iterations, or when the iterations contract fast enough (twice by "
+           "at least half) that the next change is estimated below it (fem/fixed_point.hpp). A "
+           "temperature difference: give it in K; a value in degC is read as an absolute temperature "
+           "and rejected by the range.");
   s.integer("solver.max_coupling_iterations").default_value("60")
       .range(Range::closed(1, 1000))
       .doc("Cap on the electro-thermal coupling iterations of one time step; reaching it "

@@ -508,6 +508,7 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
         fp.depth = problem.solver.coupling_acceleration_depth;
         fp.tolerance = problem.solver.coupling_tolerance;
         fp.max_iterations = problem.solver.max_coupling_iterations;
+        fp.estimate_error = true;  // fem/fixed_point.hpp: the iterate that would only confirm is saved
         // Retries: where the iteration cycles (kinks of tabulated properties at a contact
         // edge that heats, measured on the paper's mesh at 16 ms), the step is solved
         // again from its start with the other Anderson depth (2, or 5 if 2 was

@@ -127,3 +127,48 @@ TEST(FixedPoint, DampingStopsThePlainIterationFromCycling) {
   EXPECT_NEAR(u[0], 1.0, 1e-12);
   EXPECT_LE(report.iterations, 3);
 }
+
+// A scalar contraction G(u) = u* + θ (u − u*), θ = 0.05, u* = 1, from u_0 = 11 (plain
+// iteration): the changes are c_k = (1 − θ) θ^k 10 = 9.5, 0.475, 0.02375, 0.0011875,
+// 5.9e-5, ... With tolerance 10⁻³ the change test stops at the fifth evaluation (c_4 =
+// 5.9e-5), the contraction estimate at the fourth: after c_3 = 1.1875e-3 > 10⁻³ with
+// θ = 0.05 twice in a row, it puts G(u_3) at θ c_3/(1 − θ) = 6.25e-5 from u*, which for
+// a linear map is exact (G(u_3) − u* = 10 θ⁴).
+TEST(FixedPoint, ContractionEstimateSavesTheConfirmingEvaluation) {
+  const double theta = 0.05;
+  const auto G = [&](const Eigen::VectorXd& x, Eigen::VectorXd& g) {
+    g = Eigen::VectorXd::Constant(1, 1.0 + theta * (x[0] - 1.0));
+    return true;
+  };
+  FixedPointSettings s;
+  s.depth = 0;
+  s.tolerance = 1e-3;
+  Eigen::VectorXd u = Eigen::VectorXd::Constant(1, 11.0);
+  const auto plain = solve_fixed_point(G, u, s);
+  ASSERT_TRUE(plain.converged) << plain.message;
+  EXPECT_EQ(plain.iterations, 5);
+  EXPECT_FALSE(plain.estimated);
+
+  s.estimate_error = true;
+  u = Eigen::VectorXd::Constant(1, 11.0);
+  const auto estimated = solve_fixed_point(G, u, s);
+  ASSERT_TRUE(estimated.converged) << estimated.message;
+  EXPECT_TRUE(estimated.estimated);
+  EXPECT_EQ(estimated.iterations, 4);
+  EXPECT_NEAR(estimated.change, 1.1875e-3, 1e-12);
+  // u is the last point evaluated, u_3 = 1 + 10 θ³; its map value G(u_3) is within the
+  // tolerance of the fixed point.
+  EXPECT_NEAR(u[0], 1.0 + 10 * theta * theta * theta, 1e-12);
+  EXPECT_LT(std::abs(1.0 + theta * (u[0] - 1.0) - 1.0), s.tolerance);
+
+  // A slow contraction (θ = 0.9) never trusts the estimate: the change test stops it.
+  const auto slow = [&](const Eigen::VectorXd& x, Eigen::VectorXd& g) {
+    g = Eigen::VectorXd::Constant(1, 1.0 + 0.9 * (x[0] - 1.0));
+    return true;
+  };
+  u = Eigen::VectorXd::Constant(1, 11.0);
+  s.max_iterations = 200;
+  const auto slow_report = solve_fixed_point(slow, u, s);
+  ASSERT_TRUE(slow_report.converged) << slow_report.message;
+  EXPECT_FALSE(slow_report.estimated);
+}
