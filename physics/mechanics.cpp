@@ -674,7 +674,10 @@ struct Mechanics::Impl {
     Eigen::VectorXd R0, R1, dummy;
     increment = base;
     evaluate(ctrl, K0, R0, true);
-    const double h = 1e-6;
+    // A perturbation of 1 nm at the largest nodal move: a fixed factor on Newton steps
+    // of 10⁻¹⁰ m moved nodes by 10⁻¹⁶ m, within a few last bits of their coordinates
+    // (about 4·10⁻¹⁹ m at r = 3 mm), and the check reported round-off as tangent error.
+    const double h = 1e-9 / std::max(step.lpNorm<Eigen::Infinity>(), 1e-300);
     increment = base + h * step;
     fem::SparseMatrix K1;
     evaluate(ctrl, K1, R1, false);
