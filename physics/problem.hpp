@@ -84,7 +84,7 @@ struct SolverSettings {
 struct OutputSettings {
   std::string directory;
   double interval = 0;  // s, between output steps (signals)
-  double field_interval = 0;  // s, between field outputs, a multiple of interval
+  double field_interval = 0;  // s, least time between field outputs
   bool fields = false;  // write .vtu field files
 };
 
