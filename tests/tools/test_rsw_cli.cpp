@@ -116,6 +116,24 @@ TEST(RswSimulate, SqueezeRunWritesReadableResultsAndFields) {
   fs::remove_all(dir);
 }
 
+// Signals every 2 ms, fields at least 5 ms apart: signal rows at 0, 2, ..., 10 ms;
+// fields at 0 ms (the first output), 6 ms (the first output at least 5 ms after it)
+// and 10 ms (the last step, only 4 ms after 6 ms).
+TEST(RswSimulate, FieldsAreWrittenAtLeastTheFieldIntervalApartAndAtTheEnd) {
+  const fs::path dir = fresh_dir("field_interval");
+  const CommandResult r = run_rsw("simulate " + squeeze_case + " -q -o " + dir.string() + coarse +
+                                  " --set output.interval=2ms --set output.field_interval=5ms");
+  ASSERT_EQ(r.status, 0) << r.output;
+  rsw::fem::Hdf5File h5(dir / "results.h5", rsw::fem::Hdf5Mode::read);
+  EXPECT_EQ(h5.read_doubles("/signals/time").size(), 6u);
+  const auto steps = rsw::fem::read_pvd(dir / "fields.pvd");
+  ASSERT_EQ(steps.size(), 3u);
+  EXPECT_NEAR(steps[0].time, 0.0, 1e-12);
+  EXPECT_NEAR(steps[1].time, 0.006, 1e-12);
+  EXPECT_NEAR(steps[2].time, 0.010, 1e-12);
+  fs::remove_all(dir);
+}
+
 TEST(RswSimulate, FailedRunLeavesOnlyPartialFolderWithReason) {
   const fs::path dir = fresh_dir("fail");
   // Seating steps of 1 nm cannot reach 5 % of the force within the step cap.
