@@ -494,6 +494,7 @@ contact::InterfaceModel interface_model(const fem::Mesh& mesh, const ContactPara
   contact::InterfaceModel model;
   model.thermal = {parameters.htc_p2, parameters.htc_p3, parameters.htc_p4};
   model.bonding_band = parameters.bonding_band;
+  model.bonding_gap = parameters.bonding_gap;
   for (const auto& [name, pair] : mesh.interfaces) {
     contact::InterfaceProperties props;
     props.name = name;

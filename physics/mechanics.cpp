@@ -77,15 +77,21 @@ struct Mechanics::Impl {
   std::vector<materials::J2State> state, trial_state;
   std::vector<Vector4> trial_stress;
   std::vector<std::vector<double>> tau, trial_tau;  // per pairing, per point
-  // A bonded point is tied to a fixed material point of the master face: the
-  // traction follows the change of the relative position vector d = x_s - x_m,
-  // t = ε_N (d_b - d), exact and linear in the displacements.
+  // A bonded point is tied to a fixed material point of the master face. With the
+  // relative position vector d = x_s - x_m and e = d_b - d, the tie holds the tangential
+  // part linearly, ε_N (e·t_b), and resists opening only, with the contact's C¹ law
+  // mirrored: a tension T = p(e·n_b), p the smoothed penalty pressure of the contact.
+  // Compression stays with the contact, so a tie formed while the surfaces were still
+  // a little apart does not prop them apart as a strut. n_b, t_b: the pairing's normal
+  // and tangent when the tie formed.
   struct Tie {
     bool on = false;
     double degree = 0;  // bonding degree β ∈ [0, 1], never decreasing
     std::array<int, 2> master_nodes{};
     std::array<double, 2> master_weights{};
     Eigen::Vector2d reference = Eigen::Vector2d::Zero();  // d_b
+    Eigen::Vector2d normal = Eigen::Vector2d::Zero();     // n_b
+    Eigen::Vector2d tangent = Eigen::Vector2d::Zero();    // t_b
   };
   std::vector<std::vector<Tie>> ties;  // per pairing, per point
 
@@ -532,13 +538,19 @@ struct Mechanics::Impl {
         Eigen::Vector2d d = pt.position;
         for (int s = 0; s < 2; ++s)
           d -= tie.master_weights[s] * (current.nodes[tie.master_nodes[s]] + node_increment(tie.master_nodes[s]));
-        const Eigen::Vector2d traction = eps_n * (tie.reference - d);  // on the slave side
+        // On the slave side: ε_N (e·t_b) t_b − T n_b, with ∂e/∂u = −B and
+        // ∂T/∂(e·n_b) = −k (k = −dp/dg ≥ 0 of the penalty law).
+        const Eigen::Vector2d e = tie.reference - d;
+        const auto [tension, k_tension] = penalty_pressure(e.dot(tie.normal), eps_n, settings.contact_smoothing);
+        const Eigen::Vector2d traction = eps_n * e.dot(tie.tangent) * tie.tangent - tension * tie.normal;
+        const Eigen::Matrix2d stiffness =
+            eps_n * tie.tangent * tie.tangent.transpose() + k_tension * tie.normal * tie.normal.transpose();
         const double beta = tie.degree;
         const double A_tie = weight * pt.reference_area;
-        add(beta * A_tie * B.transpose() * traction, beta * eps_n * A_tie * B.transpose() * B);
-        if (beta >= 1) continue;
+        add(beta * A_tie * B.transpose() * traction, beta * A_tie * B.transpose() * stiffness * B);
       }
-      // Contact and friction carry the share 1 − β of a partly bonded point.
+      // Friction carries the share 1 − β of a partly bonded point; the contact pressure
+      // acts whole, bonded or not (the tie resists opening only).
       const double share = tie.on ? 1 - tie.degree : 1.0;
       if (!pt.paired || pt.gap >= 0) continue;
       if (!locate(pt.slave_nodes, pt.master_nodes)) {
@@ -561,6 +573,8 @@ struct Mechanics::Impl {
       const auto [pressure, k_n] = penalty_pressure(pt.gap, eps_n, settings.contact_smoothing);
       Vector8 force = pressure * A * Nv;                        // contact force on both sides
       Matrix8 stiffness = k_n * A * Nv * Nv.transpose();        // -∂f/∂u
+      Vector8 friction_force = Vector8::Zero();                 // its friction part
+      Matrix8 friction_stiffness = Matrix8::Zero();
       // Geometric terms: the normal n, the tangent t and the master weights (1 − η, η)
       // move with the master face e = x_2 − x_1 (length L) and with the projection η:
       //   δn = t (n·δe)/L,  δt = −n (n·δe)/L,  δη = −(Tvᵀ δu + g (n·δe)/L)/L,
@@ -600,16 +614,17 @@ struct Mechanics::Impl {
           continue;
         }
         trial_tau[p][idx] = tau_value;
-        force -= tau_value * A * Tv;  // friction opposes the slip
+        friction_force = -tau_value * A * Tv;  // friction opposes the slip
         // ∂slip/∂u = Tvᵀ + duᵀ ∂Tv/∂u; ∂p/∂u = −k_n Nvᵀ.
         Vector8 dslip = Tv;
         if (geometric) dslip += (du.dot(Nv) * Dv - du.dot(Dt) * (Tv + gL * Dv)) / L;
-        stiffness += dtau_dtrial * eps_t * A * Tv * dslip.transpose();
-        stiffness -= dtau_dp * k_n * A * Tv * Nv.transpose();
+        friction_stiffness = dtau_dtrial * eps_t * A * Tv * dslip.transpose();
+        friction_stiffness -= dtau_dp * k_n * A * Tv * Nv.transpose();
         if (geometric)
-          stiffness += (tau_value * A / L) * (Nv * Dv.transpose() - Dt * Tv.transpose() - gL * Dt * Dv.transpose());
+          friction_stiffness +=
+              (tau_value * A / L) * (Nv * Dv.transpose() - Dt * Tv.transpose() - gL * Dt * Dv.transpose());
       }
-      if (!friction_coupling_only) add(share * force, share * stiffness);
+      if (!friction_coupling_only) add(force + share * friction_force, stiffness + share * friction_stiffness);
     }
   }
 
@@ -1127,17 +1142,18 @@ void Mechanics::set_bonding_degree(const std::vector<std::vector<double>>& degre
     if (tie.on) tie.degree = std::max(tie.degree, std::min(1.0, value));
     if (!(value > 0) || tie.on || !pt.paired) return;
     tie.degree = std::min(1.0, value);
-    // Bond in the state reached, keeping the whole contact traction of that moment,
-    // p n − τ t (pressure and committed friction; the slave side's traction in
-    // group_kernel), so that the traction is continuous when the point bonds.
+    // Bond in the state reached: no tension, and the tangential traction of the
+    // committed friction, −τ t (the slave side's traction in group_kernel), so that the
+    // traction is continuous when the point bonds (the contact pressure acts on).
     tie.on = true;
     tie.master_nodes = pt.master_nodes;
     tie.master_weights = pt.master_weights;
+    tie.normal = pt.normal;
+    tie.tangent = pt.tangent;
     const Eigen::Vector2d x_m = pt.master_weights[0] * m.current.nodes[pt.master_nodes[0]] +
                                 pt.master_weights[1] * m.current.nodes[pt.master_nodes[1]];
-    const double pressure = penalty_pressure(pt.gap, m.normal_penalty[q], m.settings.contact_smoothing).pressure;
     const double friction = m.tau[q][i];
-    tie.reference = (pt.position - x_m) + (pressure * pt.normal - friction * pt.tangent) / m.normal_penalty[q];
+    tie.reference = (pt.position - x_m) - friction * pt.tangent / m.normal_penalty[q];
   };
   for (std::size_t p = 0; p < m.pairings.size() && p < degree.size(); ++p)
     for (std::size_t i = 0; i < m.pairings[p].points().size() && i < degree[p].size(); ++i)
@@ -1160,17 +1176,8 @@ std::vector<double> Mechanics::contact_pressure(int p) const {
   const auto& points = m.pairings.at(p).points();
   for (std::size_t i = 0; i < points.size(); ++i) {
     const auto& pt = points[i];
-    const auto& tie = m.ties[p][i];
-    if (tie.on) {  // normal component of the tie traction, compressive part, and contact
-      const Eigen::Vector2d x_m = tie.master_weights[0] * m.current.nodes[tie.master_nodes[0]] +
-                                  tie.master_weights[1] * m.current.nodes[tie.master_nodes[1]];
-      const double contact =
-          pt.paired ? penalty_pressure(pt.gap, m.normal_penalty[p], m.settings.contact_smoothing).pressure : 0.0;
-      out.push_back(tie.degree * std::max(0.0, m.normal_penalty[p] * (tie.reference - (pt.position - x_m)).dot(pt.normal)) +
-                    (1 - tie.degree) * contact);
-    } else {
-      out.push_back(pt.paired ? penalty_pressure(pt.gap, m.normal_penalty[p], m.settings.contact_smoothing).pressure : 0.0);
-    }
+    // Compression is the contact's alone, bonded or not (a tie resists opening only).
+    out.push_back(pt.paired ? penalty_pressure(pt.gap, m.normal_penalty[p], m.settings.contact_smoothing).pressure : 0.0);
   }
   return out;
 }

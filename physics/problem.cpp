@@ -201,6 +201,13 @@ ConfigSchema build_schema() {
            "resistance drop by up to 10 % in one step where a region bonds together and the "
            "outputs jump between neighbouring parameter values.");
 
+  s.number("contact.bonding_gap", "m", "um").default_value("1 um")
+      .range(Range::open_closed(0, 1000))
+      .doc("Sheets fuse only where they touch: a sheet/sheet point's bonding degree is "
+           "multiplied by a factor of its gap that falls smoothly (C1) from 1 at zero gap to 0 "
+           "at this gap, so sheets that have parted beside the contact do not bond across the "
+           "opening. Our choice, of the order of the surface roughness.");
+
   s.section("thermal", "Initial and boundary conditions of the thermal field, and the "
                        "modified conductivity of the melt.");
   s.number("thermal.initial_temperature", "degC", "degC").default_value("20 degC")
@@ -518,6 +525,7 @@ Problem make_problem(const Config& config) {
   problem.contact.htc_p4 = config.number("contact.htc_p4");
   problem.contact.friction_coefficient = config.number("contact.friction_coefficient");
   problem.contact.bonding_band = config.number("contact.bonding_band");
+  problem.contact.bonding_gap = config.number("contact.bonding_gap");
 
   ThermalParameters& thermal = problem.thermal;
   thermal.initial_temperature = config.number("thermal.initial_temperature");

@@ -51,6 +51,7 @@ struct ContactParameters {
   double htc_p4 = 0;                 // -, P4
   double friction_coefficient = 0;   // -, Coulomb mu
   double bonding_band = 50;          // K, S/S bonding degree rises over this much below the solidus (0: at once)
+  double bonding_gap = 1e-6;         // m, S/S points farther apart than this do not bond
 };
 
 struct ThermalParameters {

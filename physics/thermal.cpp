@@ -553,8 +553,9 @@ struct Thermal::Impl {
         const double T_s = pt.slave_weights[0] * T[pt.slave_nodes[0]] + pt.slave_weights[1] * T[pt.slave_nodes[1]];
         const double T_m = pt.master_weights[0] * T[pt.master_nodes[0]] + pt.master_weights[1] * T[pt.master_nodes[1]];
         trial_bonding.raise(static_cast<int>(p), static_cast<int>(i),
-                            contact::bonding_degree(T_s, node_material[pt.slave_nodes[0]]->solidus(), T_m,
-                                                    node_material[pt.master_nodes[0]]->solidus(), model.bonding_band));
+                            contact::bonding_degree_at_gap(T_s, node_material[pt.slave_nodes[0]]->solidus(), T_m,
+                                                           node_material[pt.master_nodes[0]]->solidus(),
+                                                           model.bonding_band, pt.gap, model.bonding_gap));
       }
     }
   }

@@ -611,9 +611,10 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
             if (beta < 1 && pt.paired) {
               const double Ts = pt.slave_weights[0] * T_iter[pt.slave_nodes[0]] + pt.slave_weights[1] * T_iter[pt.slave_nodes[1]];
               const double Tm = pt.master_weights[0] * T_iter[pt.master_nodes[0]] + pt.master_weights[1] * T_iter[pt.master_nodes[1]];
-              beta = std::max(beta, contact::bonding_degree(Ts, solidus[mesh.node_body[pt.slave_nodes[0]]], Tm,
-                                                            solidus[mesh.node_body[pt.master_nodes[0]]],
-                                                            problem.contact.bonding_band));
+              beta = std::max(beta, contact::bonding_degree_at_gap(Ts, solidus[mesh.node_body[pt.slave_nodes[0]]], Tm,
+                                                                   solidus[mesh.node_body[pt.master_nodes[0]]],
+                                                                   model.bonding_band, pt.gap,
+                                                                   model.bonding_gap));
             }
           }
         }

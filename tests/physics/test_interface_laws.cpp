@@ -224,6 +224,22 @@ TEST(InterfaceLaws, BondingDegreeRisesSmoothlyOverTheBandBelowTheColderSidesSoli
     EXPECT_EQ(contact::bonding_degree(T, sol, T, sol, 0.0), contact::bonds(T, sol, T, sol) ? 1.0 : 0.0) << T;
 }
 
+// Sheets fuse only where they touch: the thermal degree times χ(g), whole at g ≤ 0,
+// none from the bonding gap on, χ(g_b/2) = 1/2 between, C¹ at both ends.
+TEST(InterfaceLaws, SheetsBondOnlyWhereTheyTouch) {
+  const double sol = 1470, band = 50, gb = 1e-6;
+  const double hot = contact::bonding_degree(sol - 10, sol, sol, sol, band);  // 0.896
+  EXPECT_EQ(contact::bonding_degree_at_gap(sol - 10, sol, sol, sol, band, -1e-7, gb), hot);
+  EXPECT_EQ(contact::bonding_degree_at_gap(sol - 10, sol, sol, sol, band, 0.0, gb), hot);
+  EXPECT_NEAR(contact::bonding_degree_at_gap(sol - 10, sol, sol, sol, band, 0.5 * gb, gb), 0.5 * hot, 1e-15);
+  EXPECT_EQ(contact::bonding_degree_at_gap(sol + 100, sol, sol + 100, sol, band, gb, gb), 0.0);
+  EXPECT_EQ(contact::bonding_degree_at_gap(sol + 100, sol, sol + 100, sol, band, 36e-6, gb), 0.0);  // parted sheets
+  EXPECT_EQ(contact::bonding_degree_at_gap(sol - 60, sol, sol, sol, band, 0.0, gb), 0.0);          // too cold
+  const double h = 1e-12;  // m
+  EXPECT_LT((1 - contact::bonding_degree_at_gap(sol, sol, sol, sol, band, h, gb)) / h, 1e-4 / gb);
+  EXPECT_LT(contact::bonding_degree_at_gap(sol, sol, sol, sol, band, gb - h, gb) / h, 1e-4 / gb);
+}
+
 // A partly bonded point: the film's resistance weighted by 1 − β in series with the
 // bonded layer's, h = 1/((1 − β)/h_c + β/h_b).
 TEST(InterfaceLaws, PartlyBondedConductanceIsTheFadingFilmInSeriesWithTheBondedLayer) {

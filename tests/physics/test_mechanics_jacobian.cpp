@@ -135,11 +135,61 @@ TEST(MechanicsJacobian, TiedInterfaceTangentMatchesFiniteDifferences) {
   EXPECT_LT(err, 1e-6);
 }
 
+// A bonded point resists opening with the contact's own law mirrored, and leaves
+// compression to the contact (physics/mechanics.cpp, Tie): two stress-free blocks that
+// touch along z = 0, the upper one moved rigidly by ±0.4 µm (within the 1 µm smoothing of
+// the penalty law). Pressed in, the bonded interface pushes back exactly as the unbonded
+// contact does; pulled apart by the same distance, it pulls back with the same forces,
+// opposite in sign, where the unbonded interface carries nothing. Until 2026-11-26 a tie
+// also resisted compression from the state it formed in, so sheets bonded while a few
+// micrometres apart were held apart like a strut.
+TEST(MechanicsContact, BondedPointsResistOpeningAsTheContactResistsPenetration) {
+  auto block = [](const std::string& name, double z0, double z1, int n_r) {
+    fem::Quadtree tree(n_r, 2);
+    return tree.build(name, [=](double x, double y) { return fem::Point(1e-3 * x / n_r * 2, z0 + (z1 - z0) * y / 2); },
+                      [](double, double, fem::Side s) -> std::string {
+                        static const char* n[] = {"bottom", "right", "top", "axis"};
+                        return n[static_cast<int>(s)];
+                      });
+  };
+  fem::Mesh mesh = block("upper", 0.0, 0.5e-3, 4);
+  mesh.append(block("lower", -0.5e-3, 0.0, 5));
+  mesh.interfaces["tie"] = {"upper.bottom", "lower.top"};
+  materials::MaterialLibrary library;
+  const auto steel = library.load("DP1200");
+  physics::MechanicsSettings s;
+  s.fixed_boundary = "lower.bottom";
+  s.loaded_boundary = "upper.top";
+  s.friction_coefficient = 0.3;
+  const Eigen::VectorXd T = Eigen::VectorXd::Constant(mesh.n_nodes(), 20.0);
+  const int upper = 0;
+  ASSERT_EQ(mesh.node_body[0], upper);
+  auto residual = [&](bool bonded, double lift) {
+    physics::Mechanics mech(mesh, {&steel, &steel}, s, 20.0);
+    if (bonded) mech.set_bonded({std::vector<char>(mech.pairings()[0].points().size(), 1)});
+    Eigen::VectorXd u = mech.full_increment(Eigen::VectorXd::Zero(mech.n_free_force_control()));
+    for (int n = 0; n < mesh.n_nodes(); ++n)
+      if (mesh.node_body[n] == upper) u[2 * n + 1] = lift;
+    u[u.size() - 1] = lift;  // the rigid motion w of the loaded boundary, the one extra dof
+    Eigen::VectorXd R;
+    fem::SparseMatrix K;
+    mech.residual_and_tangent(u, 0.0, T, R, K);
+    return R;
+  };
+  const double d = 0.4e-6;
+  const Eigen::VectorXd pressed = residual(false, -d);
+  ASSERT_GT(pressed.norm(), 0.0);
+  EXPECT_LT((residual(true, -d) - pressed).norm(), 1e-12 * pressed.norm());
+  EXPECT_LT(residual(false, d).norm(), 1e-12 * pressed.norm());
+  EXPECT_LT((residual(true, d) + pressed).norm(), 1e-9 * pressed.norm());
+}
+
 // Sheets that start to bond (bonding degree β on the sheet/sheet points) after the
-// squeeze: the tie is formed keeping the contact traction of that moment, so the
-// residual of the squeezed state does not depend on β (the traction is continuous as a
-// point bonds), while the tangent of a partly bonded interface (the share β tied, 1 − β
-// contact with friction) matches finite differences like the contact's.
+// squeeze: the tie is formed at rest in the normal direction and with the friction
+// traction of that moment, so the residual of the squeezed state does not depend on β
+// (the traction is continuous as a point bonds), while the tangent of a partly bonded
+// interface (the contact whole, the share β tied, 1 − β friction) matches finite
+// differences like the contact's.
 TEST(MechanicsJacobian, PartlyBondedPointsKeepTheirTractionAndAConsistentTangent) {
   CoarseCase c;
   for (bool two_pass : {false, true}) {
