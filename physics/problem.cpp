@@ -326,7 +326,7 @@ ConfigSchema build_schema() {
       .doc("Time between output steps: a row of the signals (signals.csv, results.h5) at each. "
            "Every output time is also a time step. The signal features are taken on a 1 ms grid "
            "(calibration/features.hpp); signals sampled more coarsely lose the resistance peak "
-           "between samples (the default weld's R_beta: 291 uOhm from 1 ms, 243 uOhm from 5 ms "
+           "between samples (the default weld's R_beta: 297 uOhm from 1 ms, 274 uOhm from 5 ms "
            "signals; docs/MODEL.md).");
   s.number("output.field_interval", "s", "ms").default_value("5 ms")
       .range(Range::open_closed(0, 10000))
