@@ -94,6 +94,7 @@ struct Thermal::Impl {
   bool geometry_valid = false;
   bool need_matrix = true;                       // kernels compute ∂R/∂T too
   bool factorized = false;                       // the solver holds a factorisation of this step
+  long n_solves = 0, n_factorizations = 0;       // summed over the run (solver_counts)
   ThermalEnergy energy;
 
   // Inputs of the current solve.
@@ -612,8 +613,10 @@ ThermalStepReport Thermal::solve(double dt, const std::vector<fem::Point>& posit
         m.solver.factorize(m.K);
         m.factorized = true;
         ++report.factorizations;
+        ++m.n_factorizations;
       }
       step = m.constraints.distribute(m.solver.solve(m.F), /*homogeneous=*/true);
+      ++m.n_solves;
     } catch (const std::exception& e) {
       report.message = std::string("linear solve failed: ") + e.what();
       m.factorized = false;
@@ -729,6 +732,8 @@ Eigen::VectorXd Thermal::liquid_fraction() const {
 }
 
 const ThermalEnergy& Thermal::energy() const { return impl_->energy; }
+
+ThermalSolverCounts Thermal::solver_counts() const { return {impl_->n_solves, impl_->n_factorizations}; }
 
 void Thermal::residual_and_tangent(double dt, const std::vector<fem::Point>& positions,
                                    const contact::ContactState& contact, const std::vector<double>& joule_heat,

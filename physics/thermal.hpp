@@ -145,6 +145,13 @@ struct ThermalEnergy {
   double imbalance() const { return generated() - stored - removed(); }
 };
 
+// Linear algebra of the thermal solves so far: corrections solved (Newton and chord
+// steps) and factorisations of the tangent.
+struct ThermalSolverCounts {
+  long solves = 0;
+  long factorisations = 0;
+};
+
 struct ThermalStepReport {
   bool converged = false;
   int iterations = 0;
@@ -192,6 +199,7 @@ class Thermal {
   const Eigen::VectorXd& peak_temperature() const;       // °C, committed nodal maximum
   Eigen::VectorXd liquid_fraction() const;               // of temperature()
   const ThermalEnergy& energy() const;                   // of the last solve
+  ThermalSolverCounts solver_counts() const;             // summed over the run
   const contact::BondingState& bonding() const;          // committed
   // h at every pairing point of the last solve (HTC·χ, or bonded), W/(m²K).
   const std::vector<std::vector<double>>& interface_conductance() const;

@@ -697,6 +697,8 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
                                        {"lu_factorisations", c.lu_factorisations},
                                        {"cell_matrices_scattered", c.cell_matrices_scattered},
                                        {"cell_matrices_reused", c.cell_matrices_reused}};
+    const ThermalSolverCounts t = thermal.solver_counts();
+    result.thermal_linear_algebra = {{"solves", t.solves}, {"factorisations", t.factorisations}};
   }
   // Final nugget geometry (MODEL.md §8).
   {
@@ -806,6 +808,7 @@ RunResult run_weld(const Problem& problem, const fs::path& output_dir,
     j["mechanics_loose_substeps"] = result.n_mechanics_loose;
     j["coupling_retries"] = result.n_coupling_retries;
     for (const auto& [name, count] : result.mechanics_linear_algebra) j["mechanics_linear_algebra"][name] = count;
+    for (const auto& [name, count] : result.thermal_linear_algebra) j["thermal_linear_algebra"][name] = count;
     for (const auto& [name, value] : result.nugget) j["nugget"][name] = value;
     for (const auto& [name, value] : result.energy) j["energy_J"][name] = value;
     j["dynamic_resistance_peak_ohm"] = resistance_peak;  // over all weld steps

@@ -67,6 +67,8 @@ struct RunResult {
   // lu_factorisations, cell_matrices_scattered, cell_matrices_reused; see
   // MechanicsSolverCounts).
   std::vector<std::pair<std::string, long>> mechanics_linear_algebra;
+  // Linear algebra of the thermal solves (solves, factorisations; ThermalSolverCounts).
+  std::vector<std::pair<std::string, long>> thermal_linear_algebra;
   // Final nugget geometry (d_n_liq, h_n_liq, d_n_sol, h_n_sol, penetration_<sheet>,
   // w_elec, d_indent, t_unmolt; m or fractions) and the energy balance (electrical,
   // stored, removed, imbalance in J; nugget_fraction of the electrical energy held
