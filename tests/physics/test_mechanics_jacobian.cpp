@@ -43,6 +43,32 @@ double jacobian_error(physics::Mechanics& mech, const Eigen::VectorXd& T, double
   return (fd - Kv).norm() / Kv.norm();
 }
 
+// Two steel blocks touching along z = 0 (radius 2 mm, 0.5 mm high each): "upper" (4
+// columns of cells) on "lower" (5 columns), their faces paired as the interface "tie";
+// lower.bottom fixed, upper.top loaded, friction 0.3.
+fem::Mesh two_blocks() {
+  auto block = [](const std::string& name, double z0, double z1, int n_r) {
+    fem::Quadtree tree(n_r, 2);
+    return tree.build(name, [=](double x, double y) { return fem::Point(1e-3 * x / n_r * 2, z0 + (z1 - z0) * y / 2); },
+                      [](double, double, fem::Side s) -> std::string {
+                        static const char* n[] = {"bottom", "right", "top", "axis"};
+                        return n[static_cast<int>(s)];
+                      });
+  };
+  fem::Mesh mesh = block("upper", 0.0, 0.5e-3, 4);
+  mesh.append(block("lower", -0.5e-3, 0.0, 5));
+  mesh.interfaces["tie"] = {"upper.bottom", "lower.top"};
+  return mesh;
+}
+
+physics::MechanicsSettings two_block_settings() {
+  physics::MechanicsSettings s;
+  s.fixed_boundary = "lower.bottom";
+  s.loaded_boundary = "upper.top";
+  s.friction_coefficient = 0.3;
+  return s;
+}
+
 // The same at the first Newton iterate from the committed state towards `force`.
 double jacobian_error_at_first_iterate(physics::Mechanics& mech, const Eigen::VectorXd& T, double force) {
   Eigen::VectorXd R;
@@ -93,24 +119,10 @@ TEST(MechanicsJacobian, FrictionlessTangentIsSymmetric) {
 // Two stacked blocks whose interface is tied (fused sheets): the tie is linear in the
 // displacements, so the tangent must match finite differences to round-off.
 TEST(MechanicsJacobian, TiedInterfaceTangentMatchesFiniteDifferences) {
-  fem::Mesh mesh;
-  auto block = [](const std::string& name, double z0, double z1, int n_r) {
-    fem::Quadtree tree(n_r, 2);
-    return tree.build(name, [=](double x, double y) { return fem::Point(1e-3 * x / n_r * 2, z0 + (z1 - z0) * y / 2); },
-                      [](double, double, fem::Side s) -> std::string {
-                        static const char* n[] = {"bottom", "right", "top", "axis"};
-                        return n[static_cast<int>(s)];
-                      });
-  };
-  mesh = block("upper", 0.0, 0.5e-3, 4);
-  mesh.append(block("lower", -0.5e-3, 0.0, 5));
-  mesh.interfaces["tie"] = {"upper.bottom", "lower.top"};
+  const fem::Mesh mesh = two_blocks();
   materials::MaterialLibrary library;
   const auto steel = library.load("DP1200");
-  physics::MechanicsSettings s;
-  s.fixed_boundary = "lower.bottom";
-  s.loaded_boundary = "upper.top";
-  s.friction_coefficient = 0.3;
+  const physics::MechanicsSettings s = two_block_settings();
   physics::Mechanics mech(mesh, {&steel, &steel}, s, 20.0);
   std::vector<std::vector<char>> all(1, std::vector<char>(mech.pairings()[0].points().size(), 1));
   mech.set_bonded(all);
@@ -144,23 +156,10 @@ TEST(MechanicsJacobian, TiedInterfaceTangentMatchesFiniteDifferences) {
 // also resisted compression from the state it formed in, so sheets bonded while a few
 // micrometres apart were held apart like a strut.
 TEST(MechanicsContact, BondedPointsResistOpeningAsTheContactResistsPenetration) {
-  auto block = [](const std::string& name, double z0, double z1, int n_r) {
-    fem::Quadtree tree(n_r, 2);
-    return tree.build(name, [=](double x, double y) { return fem::Point(1e-3 * x / n_r * 2, z0 + (z1 - z0) * y / 2); },
-                      [](double, double, fem::Side s) -> std::string {
-                        static const char* n[] = {"bottom", "right", "top", "axis"};
-                        return n[static_cast<int>(s)];
-                      });
-  };
-  fem::Mesh mesh = block("upper", 0.0, 0.5e-3, 4);
-  mesh.append(block("lower", -0.5e-3, 0.0, 5));
-  mesh.interfaces["tie"] = {"upper.bottom", "lower.top"};
+  const fem::Mesh mesh = two_blocks();
   materials::MaterialLibrary library;
   const auto steel = library.load("DP1200");
-  physics::MechanicsSettings s;
-  s.fixed_boundary = "lower.bottom";
-  s.loaded_boundary = "upper.top";
-  s.friction_coefficient = 0.3;
+  const physics::MechanicsSettings s = two_block_settings();
   const Eigen::VectorXd T = Eigen::VectorXd::Constant(mesh.n_nodes(), 20.0);
   const int upper = 0;
   ASSERT_EQ(mesh.node_body[0], upper);
