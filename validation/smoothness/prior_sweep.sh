@@ -1,0 +1,72 @@
+#!/usr/bin/env bash
+# The paper's Fig. 6 diagnostic (MODEL.md §9) over the whole P1 prior: the paper's case
+# on the coarse mesh at N values of log10 P1 evenly spaced over [-3, -1] (the E/S HTC
+# constant's prior, Table I), the signal features of each run (`rsw features`), and
+# for each feature the residual after detrending — a least-squares polynomial of
+# degree D in log10 P1 — relative to the feature's range over the sweep. Noise shows
+# as residuals that do not shrink when D grows; a smooth trend's residual falls
+# quickly with D.
+#   bash validation/smoothness/prior_sweep.sh [N=40] [D=6] [extra --set options]
+# Runs two at a time (about 1 min for N = 40 on two cores); prints one line per feature,
+# and writes every run's features to $CSV if that is set (one row per run).
+# The binary is build/tools/rsw, or $RSW.
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+n=${1:-40}; degree=${2:-6}; shift $(( $# > 2 ? 2 : $# )) || true
+rsw=${RSW:-build/tools/rsw}
+out=$(mktemp -d)
+run() {
+  local k=$1; shift
+  local p1
+  p1=$(/usr/bin/python3 -c "print(10**(-3+2*$k/($n-1)))")
+  if OMP_NUM_THREADS=1 "$rsw" simulate validation/paper_case/weld.yaml -q -o "$out/run$k" --set mesh.base_size=0.5mm \
+      --set mesh.weld_zone.levels=1 --set output.fields=false --set contact.electrode_sheet.htc_p1="$p1" "$@" \
+      > "$out/log$k" 2>&1; then
+    "$rsw" features "$out/run$k/signals.csv" -o "$out/run$k/features.json" > /dev/null 2>&1 || true
+  else
+    echo "run $k (P1 = $p1) failed: $(tail -1 "$out/log$k")"
+  fi
+}
+for k in $(seq 0 $((n - 1))); do
+  run "$k" "$@" &
+  if (( k % 2 == 1 )); then wait; fi
+done
+wait
+/usr/bin/python3 - "$out" "$n" "$degree" "${CSV:-}" <<'PY'
+import csv, json, os, sys
+import numpy as np
+out, n, degree, table = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), sys.argv[4]
+x, rows = [], []
+for k in range(n):
+    path = f"{out}/run{k}/features.json"
+    if not os.path.exists(path):
+        continue
+    data = json.load(open(path))
+    data = data.get("features", data)
+    x.append(-3 + 2 * k / (n - 1))
+    rows.append({name: entry["value"] for name, entry in data.items()})
+x = np.array(x)
+if table:
+    with open(table, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["log10_P1"] + list(rows[0]))
+        for xi, r in zip(x, rows):
+            w.writerow([f"{xi:.6g}"] + [r.get(name) for name in rows[0]])
+print(f"{len(x)} of {n} runs; residual after a degree-{degree} polynomial fit in log10 P1, "
+      f"relative to the feature's range over the sweep")
+for name in rows[0]:
+    y = np.array([r.get(name, np.nan) if r.get(name) is not None else np.nan for r in rows], dtype=float)
+    ok = np.isfinite(y)
+    if ok.sum() < degree + 3:
+        print(f"{name:12s} defined in {ok.sum()} runs: skipped")
+        continue
+    span = y[ok].max() - y[ok].min()
+    if span == 0:
+        print(f"{name:12s} constant")
+        continue
+    fit = np.polynomial.Polynomial.fit(x[ok], y[ok], degree)
+    residual = y[ok] - fit(x[ok])
+    print(f"{name:12s} largest residual {100 * np.abs(residual).max() / span:5.1f} %, "
+          f"rms {100 * residual.std() / span:5.1f} % of the range {y[ok].min():.5g} .. {y[ok].max():.5g}")
+PY
+rm -rf "$out"
