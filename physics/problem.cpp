@@ -251,13 +251,14 @@ ConfigSchema build_schema() {
            "solver.time_step). The first tens of milliseconds (current ramp, contact "
            "breakdown, melting onset) set the resistance features and carry the steepest "
            "events: on the paper's mesh uniform 1 ms steps put R_beta 8 % above its value at "
-           "0.25 ms, and a 0.25 ms early phase to 30 ms gives the uniform 0.25 ms value and "
+           "0.25 ms, and a 0.25 ms early phase to 20 ms gives the uniform 0.25 ms value and "
            "makes T_max smooth in P1 (docs/VERIFICATION.md, 'Time-step error').");
-  s.number("solver.early_phase_end", "s", "ms").default_value("30 ms")
+  s.number("solver.early_phase_end", "s", "ms").default_value("20 ms")
       .range(Range::closed(0, 10000))
       .doc("End of the early phase measured from the weld start (itself a step); 0: no early "
-           "phase, every step up to solver.time_step. 30 ms (default) is the measured choice "
-           "for the paper's schedule (docs/VERIFICATION.md, 'Time-step error').");
+           "phase, every step up to solver.time_step. 20 ms (default since session 17, 30 ms "
+           "before) is the measured choice for the paper's schedule (docs/VERIFICATION.md, "
+           "'Time-step error').");
   s.integer("solver.squeeze_force_steps").default_value("10")
       .range(Range::closed(1, 1000))
       .doc("Force-controlled steps of the squeeze, after seating (see docs/MECHANICS.md).");

@@ -160,8 +160,8 @@ TEST(Problem, ScheduleIsPiecewiseLinearAndHeldOutside) {
 
 // The step schedule of the paper's case (breakpoints at the 10 and 140 ms ramp ends
 // and every 5 ms output): without an early phase 160 steps of 1 ms; with the default
-// early phase of 0.25 ms steps to 30 ms, 30 / 0.25 = 120 steps there and 130 of 1 ms
-// after, 250 in all.
+// early phase of 0.25 ms steps to 20 ms, 20 / 0.25 = 80 steps there and 140 of 1 ms
+// after, 220 in all.
 TEST(Problem, EarlyPhaseHasItsOwnLargestStepAndEndsOnAStep) {
   const auto steps_of = [](const std::vector<double>& times, double from, double to, double& longest) {
     int n = 0;
@@ -176,12 +176,12 @@ TEST(Problem, EarlyPhaseHasItsOwnLargestStepAndEndsOnAStep) {
   double longest = 0;
   EXPECT_EQ(weld_step_times(load_problem(paper_case, {"solver.early_phase_end=0 ms"})).size(), 161u);
   const auto times = weld_step_times(load_problem(paper_case));
-  ASSERT_EQ(times.size(), 251u);
-  EXPECT_EQ(steps_of(times, 0, 0.030, longest), 120);
+  ASSERT_EQ(times.size(), 221u);
+  EXPECT_EQ(steps_of(times, 0, 0.020, longest), 80);
   EXPECT_NEAR(longest, 0.25e-3, 1e-12);
-  EXPECT_EQ(steps_of(times, 0.030, 0.160, longest), 130);
+  EXPECT_EQ(steps_of(times, 0.020, 0.160, longest), 140);
   EXPECT_NEAR(longest, 1e-3, 1e-12);
-  EXPECT_NE(std::find_if(times.begin(), times.end(), [](double t) { return std::abs(t - 0.030) < 1e-12; }),
+  EXPECT_NE(std::find_if(times.begin(), times.end(), [](double t) { return std::abs(t - 0.020) < 1e-12; }),
             times.end());
 }
 

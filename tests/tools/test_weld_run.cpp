@@ -385,7 +385,7 @@ TEST(WeldRun, FoldedCellFailsTheRunSayingWhereAndWhen) {
 // 116.9, 117.04, 117.09, 117.15 µΩ: a smooth knee, where the end-of-weld growth of
 // the E/S contact stops reaching the end of the feature window), and at 0.02 the
 // knee's curvature alone gave 13 % of the change over the prior. Measured
-// (2026-11-26): R_γ 4.5 %, T_max and d_n,sol below 1 % of their change over the
+// (2026-11-26, early phase to 20 ms): R_γ 4.2 %, T_max and d_n,sol below 1 % of their change over the
 // whole prior, P1 from 1e-3 to 1e-1; the remainder is of contact-front and bonding
 // events that happen per point and per time step. The bound, 10 %, is the
 // resolution a Gaussian-process surrogate with a nugget needs to see the trend.
