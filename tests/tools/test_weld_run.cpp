@@ -139,6 +139,21 @@ TEST(WeldRun, EnergyBalanceHoldsWithinOnePercent) {
   EXPECT_LT(std::abs(electrical - stored - removed), 0.01 * electrical);
 }
 
+// summary.json counts the thermal linear algebra: every weld step factorises its first
+// tangent, every factorisation serves at least one solve, and every electro-thermal
+// coupling iterate solves at least one thermal correction.
+TEST(WeldRun, SummaryCountsThermalSolvesAndFactorisations) {
+  std::ifstream in(coarse_run() / "summary.json");
+  ASSERT_TRUE(in);
+  const auto j = nlohmann::json::parse(in);
+  const long steps = j.at("weld_steps"), coupling = j.at("coupling_iterations");
+  const long solves = j.at("thermal_linear_algebra").at("solves");
+  const long factorisations = j.at("thermal_linear_algebra").at("factorisations");
+  EXPECT_GE(factorisations, steps);
+  EXPECT_GE(solves, factorisations);
+  EXPECT_GE(solves, coupling);
+}
+
 TEST(WeldRun, FieldsOpenInVtkAndSignalsInHdf5) {
   const auto steps = rsw::fem::read_pvd(coarse_run() / "fields.pvd");
   ASSERT_EQ(steps.size(), 17u);  // 0, 10, ..., 160 ms
