@@ -71,8 +71,8 @@ double bonding_degree(double temperature_slave, double solidus_slave, double tem
 }
 
 double bonding_degree_at_gap(double temperature_slave, double solidus_slave, double temperature_master,
-                             double solidus_master, double band, double gap, double closure_gap) {
-  const double chi = closure_factor(gap, closure_gap).value;
+                             double solidus_master, double band, double gap, double bonding_gap) {
+  const double chi = closure_factor(gap, bonding_gap).value;
   if (chi <= 0) return 0.0;
   return chi * bonding_degree(temperature_slave, solidus_slave, temperature_master, solidus_master, band);
 }

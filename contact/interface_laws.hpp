@@ -116,14 +116,15 @@ bool bonds(double temperature_slave, double solidus_slave, double temperature_ma
 double bonding_degree(double temperature_slave, double solidus_slave, double temperature_master,
                       double solidus_master, double band);
 // Sheets fuse only where they touch: the bonding degree a point may reach at its gap g
-// (m, positive open) is the thermal degree above times the closure factor χ(g) of the
-// thermal contact, β = S(x) χ(g): full where the surfaces are closed (g ≤ 0), none
-// beyond the closure gap g_c (1 µm by default), C¹ in between. Without the factor the
+// (m, positive open) is the thermal degree above times the closure factor's shape
+// taken over the bonding gap g_b (`contact.bonding_gap`, 1 µm by default), β = S(x)
+// χ(g; g_b): full where the surfaces are closed (g ≤ 0), none from g_b on, C¹ in
+// between. Without the factor the
 // sheets of the default weld bonded across gaps of 10–55 µm that had opened beside
 // the contact as the centre expanded, and the ties then held them apart as struts
 // carrying about 1.3 GPa (MODEL.md, "Bonding"). Our choice.
 double bonding_degree_at_gap(double temperature_slave, double solidus_slave, double temperature_master,
-                             double solidus_master, double band, double gap, double closure_gap);
+                             double solidus_master, double band, double gap, double bonding_gap);
 // Conductance of a point with bonding degree β: the contact's film resistance fades
 // with 1 − β in series with the bonded layer, h = 1/((1 − β)/h_contact + β/h_bonded);
 // β = 0 gives h_contact, β = 1 h_bonded, h_contact = 0 (open) gives 0 below β = 1.
