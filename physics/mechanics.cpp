@@ -77,23 +77,38 @@ struct Mechanics::Impl {
   std::vector<materials::J2State> state, trial_state;
   std::vector<Vector4> trial_stress;
   std::vector<std::vector<double>> tau, trial_tau;  // per pairing, per point
-  // A bonded point is tied to a fixed material point of the master face. With the
-  // relative position vector d = x_s - x_m and e = d_b - d, the tie holds the tangential
-  // part linearly, ε_N (e·t_b), and resists opening only, with the contact's C¹ law
-  // mirrored: a tension T = p(e·n_b), p the smoothed penalty pressure of the contact.
-  // Compression stays with the contact, so a tie formed while the surfaces were still
-  // a little apart does not prop them apart as a strut. n_b, t_b: the pairing's normal
-  // and tangent when the tie formed.
+  // A bonded point is tied to a fixed material point of the master face. The bonding
+  // degree β is the bonded share of the point's area, and each share bonds at rest in
+  // the configuration it bonds in, so a tie carries the relative motion since bonding
+  // weighted by the degree at each moment: with the relative position d = x_s − x_m,
+  // the effective offset
+  //     e = e_n + β (d_n − d)          (e_n, d_n: at the last committed step),
+  // i.e. e = ∫ β d(−d). The tie holds the tangential part linearly, ε_N (e·t_b), and
+  // resists opening only, with the contact's C¹ law mirrored: a tension T = p(e·n_b),
+  // p the smoothed penalty pressure of the contact. Compression stays with the
+  // contact, so a tie formed while the surfaces were still a little apart does not
+  // prop them apart as a strut. n_b, t_b: the pairing's normal and tangent when the
+  // tie formed. Where β grows, the new share takes over the friction traction it
+  // carried (e_n gains −Δβ τ t_b / ε_N), so the traction is continuous. (Before
+  // 2026-11-26 the whole share β acted on the offset since the tie first formed: a
+  // degree rising from 10⁻⁵ to 1 in one step multiplied micrometres of slip at a
+  // nearly unbonded point into a 19 kN nodal force; docs/MECHANICS.md.)
   struct Tie {
     bool on = false;
     double degree = 0;  // bonding degree β ∈ [0, 1], never decreasing
     std::array<int, 2> master_nodes{};
     std::array<double, 2> master_weights{};
-    Eigen::Vector2d reference = Eigen::Vector2d::Zero();  // d_b
-    Eigen::Vector2d normal = Eigen::Vector2d::Zero();     // n_b
-    Eigen::Vector2d tangent = Eigen::Vector2d::Zero();    // t_b
+    Eigen::Vector2d offset = Eigen::Vector2d::Zero();    // e_n
+    Eigen::Vector2d relative = Eigen::Vector2d::Zero();  // d_n
+    Eigen::Vector2d normal = Eigen::Vector2d::Zero();    // n_b
+    Eigen::Vector2d tangent = Eigen::Vector2d::Zero();   // t_b
   };
   std::vector<std::vector<Tie>> ties;  // per pairing, per point
+  // The tie's e and d at the last evaluation (committed into Tie::offset, ::relative).
+  struct TieTrial {
+    Eigen::Vector2d offset = Eigen::Vector2d::Zero(), relative = Eigen::Vector2d::Zero();
+  };
+  std::vector<std::vector<TieTrial>> tie_trial;
 
   Eigen::VectorXd increment;    // Δu of the current step (full)
   Eigen::VectorXd last_increment;  // Δu of the last committed step, for the predictor
@@ -220,6 +235,7 @@ struct Mechanics::Impl {
       }
       tau.emplace_back(pairing.points().size(), 0.0);
       ties.emplace_back(pairing.points().size());
+      tie_trial.emplace_back(pairing.points().size());
     }
     trial_tau = tau;
     force_assembler = std::make_unique<fem::Assembler>(mesh, dofs, force_constraints, dof_groups);
@@ -525,7 +541,7 @@ struct Mechanics::Impl {
       if (tie.on && friction_coupling_only) {
         if (tie.degree >= 1) continue;
       } else if (tie.on) {
-        // t = ε_N (d_b − d), d = x_s − x_m at fixed weights: linear, B maps the 8 dofs to d.
+        // d = x_s − x_m at fixed weights: linear, B maps the 8 dofs to d.
         if (!locate(pt.slave_nodes, tie.master_nodes)) {
           pairing_within = false;
           continue;
@@ -538,16 +554,17 @@ struct Mechanics::Impl {
         Eigen::Vector2d d = pt.position;
         for (int s = 0; s < 2; ++s)
           d -= tie.master_weights[s] * (current.nodes[tie.master_nodes[s]] + node_increment(tie.master_nodes[s]));
-        // On the slave side: ε_N (e·t_b) t_b − T n_b, with ∂e/∂u = −B and
+        // On the slave side: ε_N (e·t_b) t_b − T n_b, with ∂e/∂u = −β B and
         // ∂T/∂(e·n_b) = −k (k = −dp/dg ≥ 0 of the penalty law).
-        const Eigen::Vector2d e = tie.reference - d;
+        const double beta = tie.degree;
+        const Eigen::Vector2d e = tie.offset + beta * (tie.relative - d);
+        tie_trial[p][idx] = {e, d};
         const auto [tension, k_tension] = penalty_pressure(e.dot(tie.normal), eps_n, settings.contact_smoothing);
         const Eigen::Vector2d traction = eps_n * e.dot(tie.tangent) * tie.tangent - tension * tie.normal;
         const Eigen::Matrix2d stiffness =
             eps_n * tie.tangent * tie.tangent.transpose() + k_tension * tie.normal * tie.normal.transpose();
-        const double beta = tie.degree;
         const double A_tie = weight * pt.reference_area;
-        add(beta * A_tie * B.transpose() * traction, beta * A_tie * B.transpose() * stiffness * B);
+        add(A_tie * B.transpose() * traction, beta * A_tie * B.transpose() * stiffness * B);
       }
       // Friction carries the share 1 − β of a partly bonded point; the contact pressure
       // acts whole, bonded or not (the tie resists opening only).
@@ -1022,6 +1039,12 @@ void Mechanics::commit() {
   m.strain = m.trial_strain;
   m.state = m.trial_state;
   m.tau = m.trial_tau;
+  for (std::size_t q = 0; q < m.ties.size(); ++q)
+    for (std::size_t i = 0; i < m.ties[q].size(); ++i)
+      if (m.ties[q][i].on) {
+        m.ties[q][i].offset = m.tie_trial[q][i].offset;
+        m.ties[q][i].relative = m.tie_trial[q][i].relative;
+      }
   m.total += m.increment;
   m.last_increment = m.increment;
   m.last_load_change = m.load_change;
@@ -1139,12 +1162,22 @@ void Mechanics::set_bonding_degree(const std::vector<std::vector<double>>& degre
   auto apply = [&m](int q, std::size_t i, double value) {
     auto& tie = m.ties[q][i];
     const auto& pt = m.pass(q).points()[i];
-    if (tie.on) tie.degree = std::max(tie.degree, std::min(1.0, value));
-    if (!(value > 0) || tie.on || !pt.paired) return;
+    // The share Δβ that bonds now takes over the committed friction traction it
+    // carried, −τ t (the slave side's traction in group_kernel): e_n gains
+    // −Δβ τ t_b / ε_N, so the traction is continuous (the contact pressure acts on).
+    const double friction_offset = m.tau[q][i] / m.normal_penalty[q];
+    if (tie.on) {
+      const double grown = std::min(1.0, value) - tie.degree;
+      if (grown > 0) {
+        tie.offset -= grown * friction_offset * tie.tangent;
+        tie.degree += grown;
+        m.tie_trial[q][i].offset = tie.offset;
+      }
+      return;
+    }
+    if (!(value > 0) || !pt.paired) return;
+    // Bond in the state reached: no tension, and the share β of the friction traction.
     tie.degree = std::min(1.0, value);
-    // Bond in the state reached: no tension, and the tangential traction of the
-    // committed friction, −τ t (the slave side's traction in group_kernel), so that the
-    // traction is continuous when the point bonds (the contact pressure acts on).
     tie.on = true;
     tie.master_nodes = pt.master_nodes;
     tie.master_weights = pt.master_weights;
@@ -1152,8 +1185,9 @@ void Mechanics::set_bonding_degree(const std::vector<std::vector<double>>& degre
     tie.tangent = pt.tangent;
     const Eigen::Vector2d x_m = pt.master_weights[0] * m.current.nodes[pt.master_nodes[0]] +
                                 pt.master_weights[1] * m.current.nodes[pt.master_nodes[1]];
-    const double friction = m.tau[q][i];
-    tie.reference = (pt.position - x_m) - friction * pt.tangent / m.normal_penalty[q];
+    tie.relative = pt.position - x_m;
+    tie.offset = -tie.degree * friction_offset * tie.tangent;
+    m.tie_trial[q][i] = {tie.offset, tie.relative};
   };
   for (std::size_t p = 0; p < m.pairings.size() && p < degree.size(); ++p)
     for (std::size_t i = 0; i < m.pairings[p].points().size() && i < degree[p].size(); ++i)

@@ -357,11 +357,12 @@ TEST(WeldRun, CoarseTableOneStudyFailsOnlyRunsWhoseElectrodeMelted) {
 // A very resistive S/S film (run 76 of the paper-mesh Table I study: t_f,S/S = 5.6·10⁻⁵ m,
 // ρ_c,S/S = 1.8·10⁻⁵ Ω·m) melts the sheets first at the edge of their contact. With the
 // one-pass S/S contact, and the sheets bonding across any gap (contact.bonding_gap
-// 1 mm: the rule before 2026-11-26), the top cell of sheet_2 at the edge of the bonded
-// region (its master side), 62.5 µm on the paper's mesh, is sheared until one corner
-// folds at 139 ms while its quadrature-point Jacobians stay positive. (Found at 21 ms
-// with the ties of that time, which also held the sheets apart in compression; with
-// the default bonding gap of 1 µm this weld finishes, its worst cell at 0.52.) Without
+// 1 mm: the rule before 2026-11-26), the bottom cell of sheet_1 beyond the edge of the
+// bonded region, 62.5 µm on the paper's mesh, is sheared until one corner folds at
+// 69 ms while its quadrature-point Jacobians stay positive. (Found at 21 ms with the
+// ties of that time, which also held the sheets apart in compression; at 139 ms, in
+// sheet_2, before a growing bond carried only the motion since each share bonded; with
+// the default bonding gap of 1 µm this weld finishes, its worst cell at 0.53.) Without
 // the check such a run went on for tens of milliseconds on the folded cell, whose
 // conductance entries grew to 10¹³ times the others'. The run must fail there, saying
 // where and when, and leave no summary that looks valid. (~25 s: the paper's mesh; the
@@ -380,8 +381,8 @@ TEST(WeldRun, FoldedCellFailsTheRunSayingWhereAndWhen) {
             0);
   const std::string failure = failure_reason(dir);
   EXPECT_NE(failure.find("the deformed mesh has folded: cell"), std::string::npos) << failure;
-  EXPECT_NE(failure.find("of sheet_2 at (r, z) = (2.5"), std::string::npos) << failure;
-  EXPECT_NE(failure.find("weld stage, step 139 (t = 139"), std::string::npos) << failure;
+  EXPECT_NE(failure.find("of sheet_1 at (r, z) = (2.05"), std::string::npos) << failure;
+  EXPECT_NE(failure.find("weld stage, step 69 (t = 69"), std::string::npos) << failure;
   EXPECT_NE(out.find("the deformed mesh has folded"), std::string::npos) << out;
   EXPECT_FALSE(fs::exists(dir / "summary.json"));
   fs::remove_all(dir);
