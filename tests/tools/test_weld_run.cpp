@@ -328,7 +328,9 @@ TEST(WeldRun, ThermalNewtonChecksDescentOfCorrectionsAsWideAsAMeltingRange) {
 // (materials/data/CuCrZr.yaml; the other nine had folded or stalled at a sinking
 // electrode face), 19 with the thermal chord policy that stalled at melting onsets (one
 // of them, design point 58, with no melting electrode), found only by rerunning the
-// study (docs/STUDIES.md).
+// study (docs/STUDIES.md), 1 with the early phase to 20 ms, none since a growing bond
+// carries only the motion since each share bonded (session 18; looser GMRES
+// tolerances in the mechanics then failed 2, docs/PERFORMANCE.md).
 TEST(WeldRun, CoarseTableOneStudyFailsOnlyRunsWhoseElectrodeMelted) {
   const fs::path dir = fs::temp_directory_path() / ("rsw_study_" + std::to_string(::getpid()));
   std::string out;
@@ -340,7 +342,7 @@ TEST(WeldRun, CoarseTableOneStudyFailsOnlyRunsWhoseElectrodeMelted) {
   std::smatch done;
   ASSERT_TRUE(std::regex_search(out, done, std::regex(R"(90/90 runs done .*, (\d+) failed)"))) << out;
   const int failed = std::stoi(done[1]);
-  EXPECT_LE(failed, 4) << out;
+  EXPECT_LE(failed, 2) << out;
   int reasons = 0;
   std::istringstream lines(out);
   for (std::string line; std::getline(lines, line);)
