@@ -69,6 +69,28 @@ physics::MechanicsSettings two_block_settings() {
   return s;
 }
 
+// The two blocks of steel at 20 °C, and the residual with the upper block (body 0)
+// moved up rigidly by `lift` (down if negative) from the committed state.
+struct TwoBlockCase {
+  fem::Mesh mesh = two_blocks();
+  materials::MaterialLibrary library;
+  materials::Material steel = library.load("DP1200");
+  physics::MechanicsSettings settings = two_block_settings();
+  Eigen::VectorXd T = Eigen::VectorXd::Constant(mesh.n_nodes(), 20.0);
+
+  physics::Mechanics mechanics() const { return physics::Mechanics(mesh, {&steel, &steel}, settings, 20.0); }
+  Eigen::VectorXd lifted(physics::Mechanics& mech, double lift) const {
+    Eigen::VectorXd u = mech.full_increment(Eigen::VectorXd::Zero(mech.n_free_force_control()));
+    for (int n = 0; n < mesh.n_nodes(); ++n)
+      if (mesh.node_body[n] == 0) u[2 * n + 1] = lift;
+    u[u.size() - 1] = lift;  // the rigid motion w of the loaded boundary, the one extra dof
+    Eigen::VectorXd R;
+    fem::SparseMatrix K;
+    mech.residual_and_tangent(u, 0.0, T, R, K);
+    return R;
+  }
+};
+
 // The same at the first Newton iterate from the committed state towards `force`.
 double jacobian_error_at_first_iterate(physics::Mechanics& mech, const Eigen::VectorXd& T, double force) {
   Eigen::VectorXd R;
@@ -156,24 +178,12 @@ TEST(MechanicsJacobian, TiedInterfaceTangentMatchesFiniteDifferences) {
 // also resisted compression from the state it formed in, so sheets bonded while a few
 // micrometres apart were held apart like a strut.
 TEST(MechanicsContact, BondedPointsResistOpeningAsTheContactResistsPenetration) {
-  const fem::Mesh mesh = two_blocks();
-  materials::MaterialLibrary library;
-  const auto steel = library.load("DP1200");
-  const physics::MechanicsSettings s = two_block_settings();
-  const Eigen::VectorXd T = Eigen::VectorXd::Constant(mesh.n_nodes(), 20.0);
-  const int upper = 0;
-  ASSERT_EQ(mesh.node_body[0], upper);
+  const TwoBlockCase c;
+  ASSERT_EQ(c.mesh.body_names[0], "upper");
   auto residual = [&](bool bonded, double lift) {
-    physics::Mechanics mech(mesh, {&steel, &steel}, s, 20.0);
+    physics::Mechanics mech = c.mechanics();
     if (bonded) mech.set_bonded({std::vector<char>(mech.pairings()[0].points().size(), 1)});
-    Eigen::VectorXd u = mech.full_increment(Eigen::VectorXd::Zero(mech.n_free_force_control()));
-    for (int n = 0; n < mesh.n_nodes(); ++n)
-      if (mesh.node_body[n] == upper) u[2 * n + 1] = lift;
-    u[u.size() - 1] = lift;  // the rigid motion w of the loaded boundary, the one extra dof
-    Eigen::VectorXd R;
-    fem::SparseMatrix K;
-    mech.residual_and_tangent(u, 0.0, T, R, K);
-    return R;
+    return c.lifted(mech, lift);
   };
   const double d = 0.4e-6;
   const Eigen::VectorXd pressed = residual(false, -d);
@@ -190,37 +200,22 @@ TEST(MechanicsContact, BondedPointsResistOpeningAsTheContactResistsPenetration) 
 // offset since the bond first formed; in the paper-mesh weld a degree rising from
 // 10⁻⁵ to 1 in one step turned micrometres of slip into a 19 kN nodal force.)
 TEST(MechanicsContact, AGrowingBondCarriesOnlyTheMotionSinceEachShareBonded) {
-  const fem::Mesh mesh = two_blocks();
-  materials::MaterialLibrary library;
-  const auto steel = library.load("DP1200");
-  const physics::MechanicsSettings s = two_block_settings();
-  const Eigen::VectorXd T = Eigen::VectorXd::Constant(mesh.n_nodes(), 20.0);
-  const int upper = 0;
-  ASSERT_EQ(mesh.node_body[0], upper);
-  auto lifted = [&](physics::Mechanics& mech, double lift) {  // the upper block moved up rigidly
-    Eigen::VectorXd u = mech.full_increment(Eigen::VectorXd::Zero(mech.n_free_force_control()));
-    for (int n = 0; n < mesh.n_nodes(); ++n)
-      if (mesh.node_body[n] == upper) u[2 * n + 1] = lift;
-    u[u.size() - 1] = lift;
-    Eigen::VectorXd R;
-    fem::SparseMatrix K;
-    mech.residual_and_tangent(u, 0.0, T, R, K);
-    return R;
-  };
+  const TwoBlockCase c;
+  ASSERT_EQ(c.mesh.body_names[0], "upper");
   auto degree = [](const physics::Mechanics& mech, double beta) {
     return std::vector<std::vector<double>>{std::vector<double>(mech.pairings()[0].points().size(), beta)};
   };
   const double d1 = 0.4e-6, d2 = 0.3e-6, beta0 = 0.01;
-  physics::Mechanics growing(mesh, {&steel, &steel}, s, 20.0);
+  physics::Mechanics growing = c.mechanics();
   growing.set_bonding_degree(degree(growing, beta0));
-  lifted(growing, d1);
+  c.lifted(growing, d1);
   growing.commit();
   growing.set_bonding_degree(degree(growing, 1.0));
-  const Eigen::VectorXd R_growing = lifted(growing, d2);
+  const Eigen::VectorXd R_growing = c.lifted(growing, d2);
   auto whole_bond = [&](double lift) {
-    physics::Mechanics mech(mesh, {&steel, &steel}, s, 20.0);
+    physics::Mechanics mech = c.mechanics();
     mech.set_bonding_degree(degree(mech, 1.0));
-    return lifted(mech, lift);
+    return c.lifted(mech, lift);
   };
   const Eigen::VectorXd expected = whole_bond(beta0 * d1 + d2), earlier_law = whole_bond(d1 + d2);
   ASSERT_GT(expected.norm(), 0.0);
