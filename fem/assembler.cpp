@@ -248,14 +248,16 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
     // loop at a barrier whose last arrival wakes its waiters by a futex system call,
     // waiters or not: one per colour and assembly (with the kernel's futex path about
     // 5 % of a default weld's profile on a virtual machine, docs/PERFORMANCE.md).
+    // The cells in their own order (hub cells included), not colour by colour: a
+    // colour's cells lie all over the mesh, and visiting them so cost the default weld
+    // 13 % in cache misses (docs/PERFORMANCE.md, session 19).
     LocalSystem local;
-    for (const auto& cells : colours_)
-      for (const int e : cells) {
-        local.matrix.setZero(n_local, n_local);
-        local.vector.setZero(n_local);
-        cell_kernel(e, local);
-        scatter_cell(e, local);
-      }
+    for (int e = 0; e < mesh_.n_cells(); ++e) {
+      local.matrix.setZero(n_local, n_local);
+      local.vector.setZero(n_local);
+      cell_kernel(e, local);
+      scatter_cell(e, local);
+    }
   } else if (cell_kernel) {
     // An exception may not leave an OpenMP region (the process would terminate): the
     // first one thrown by a cell kernel is kept, the remaining cells are skipped, and
@@ -284,9 +286,10 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
       if (failure) std::rethrow_exception(failure);
     }
   }
-  // Cells on hub dofs, face terms and coupling groups: serial.
+  // Cells on hub dofs (threaded runs; one thread visited them above), face terms and
+  // coupling groups: serial.
   LocalSystem local;
-  if (cell_kernel)
+  if (cell_kernel && omp_get_max_threads() > 1)
     for (int e : serial_cells_) {
       local.matrix.setZero(n_local, n_local);
       local.vector.setZero(n_local);

@@ -10,10 +10,14 @@
 // coloured so that no two cells of one colour share a free dof; with more than one
 // OpenMP thread each colour is assembled in parallel (kernels must then be
 // thread-safe: keep scratch such as CellValues in thread_local storage or build it
-// inside the kernel); with one, no OpenMP region is entered (each of its barriers
-// costs a system call, even in a team of one). Cells
-// on a dof shared by more than 16 cells (a "hub", e.g. a rigid end face's motion)
-// are assembled serially at the end.
+// inside the kernel), and cells on a dof shared by more than 16 cells (a "hub", e.g.
+// a rigid end face's motion) are assembled serially at the end. With one thread no
+// OpenMP region is entered (each of its barriers costs a system call, even in a team
+// of one) and the cells are visited in their own order, which keeps neighbouring
+// cells' data and matrix entries together in the caches: the colour order, which
+// jumps across the mesh, made the default weld 13 % slower on one core
+// (docs/PERFORMANCE.md, session 19). The sums then differ from the threaded ones in
+// the last bits.
 //
 // Incremental cell matrices (optional, enable_cell_matrix_cache()): in a Newton
 // iteration most cells often return the same matrix as before (an elastic cell

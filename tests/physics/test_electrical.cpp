@@ -156,8 +156,10 @@ TEST(ElectricalContact, TwoBlockPotentialMatchesClosedForm) {
 // unit-current solve stalls near 5·10⁻⁶ (measured), above the GMRES tolerance (10⁻¹⁰)
 // and above what the solve once accepted (10⁻⁶). It is accepted on its componentwise
 // backward error (round-off), and the potential is the closed form of the column,
-// V = I/(πr²) (L/σ_1 + 1/C_b + L/σ_2), to 10⁻⁶ of V: the bulk entries of the interface
-// rows keep ε·10¹² ≈ 10⁻⁴ of their value (measured 3·10⁻⁸ in V). The interface current
+// V = I/(πr²) (L/σ_1 + 1/C_b + L/σ_2), to 10⁻⁴ of V: the bulk entries of the interface
+// rows keep only ε·10¹² ≈ 2·10⁻⁴ of their value, so the error depends on the order in
+// which the assembly sums them (measured 3·10⁻⁸ of V with the cells summed colour by
+// colour, 2.5·10⁻⁶ in the cells' own order, session 19). The interface current
 // C_b Δφ A, from a potential jump of 10⁻¹² of φ, carries that rounding: to 10⁻³.
 TEST(ElectricalContact, NearlyRigidBondedInterfaceSolvesToRoundOffOfItsBackwardError) {
   const double L = 1e-3, radius = 1e-3, current = 2e3, factor = 1e9;
@@ -182,7 +184,7 @@ TEST(ElectricalContact, NearlyRigidBondedInterfaceSolvesToRoundOffOfItsBackwardE
   EXPECT_GT(C, 1e20);  // S/m²: 10⁹ × σ over a half cell
   const double V = current / (M_PI * radius * radius) * (L / (1 / rho_1) + 1 / C + L / (1 / rho_2));
   std::printf("bonded column: C_b = %.3e S/m^2, V = %.12e V (closed form %.12e)\n", C, sol.voltage, V);
-  EXPECT_NEAR(sol.voltage, V, 1e-6 * V);
+  EXPECT_NEAR(sol.voltage, V, 1e-4 * V);
   EXPECT_NEAR(sol.interface_current[0], current, 1e-3 * current);
 }
 
