@@ -106,7 +106,54 @@ struct CholmodCholesky : Eigen::CholmodDecomposition<SparseMatrix, Eigen::Lower>
   const cholmod_factor* factor() const { return m_cholmodFactor; }  // null before the first factorisation
 };
 
+// The entries of a caller's matrix that have been nonzero in some matrix of its
+// pattern so far (see linear_solver.hpp), as a matrix of their own: `used` marks
+// them in the caller's pattern, `kept` lists their positions column by column (the
+// diagonal always), and `matrix` holds them, refreshed by take().
+struct UsedPattern {
+  PatternCopy caller;
+  std::vector<char> used;
+  std::vector<int> kept;
+  SparseMatrix matrix;
+  // Copies A's values into `matrix`; true if its pattern changed (a new analysis).
+  bool take(const SparseMatrix& A) {
+    const double* v = A.valuePtr();
+    const int n_entries = static_cast<int>(A.nonZeros());
+    bool grew = false;
+    if (!caller.matches(A)) {
+      caller.assign(A);
+      used.assign(n_entries, 0);
+      for (Eigen::Index j = 0; j < A.outerSize(); ++j)
+        for (int k = caller.outer[j]; k < caller.outer[j + 1]; ++k)
+          if (caller.inner[k] == j) used[k] = 1;
+      grew = true;
+    }
+    for (int k = 0; k < n_entries; ++k)
+      if (v[k] != 0.0 && !used[k]) {
+        used[k] = 1;
+        grew = true;
+      }
+    if (grew) {
+      kept.clear();
+      std::vector<int> outer(A.outerSize() + 1, 0);
+      for (Eigen::Index j = 0; j < A.outerSize(); ++j) {
+        for (int k = caller.outer[j]; k < caller.outer[j + 1]; ++k)
+          if (used[k]) kept.push_back(k);
+        outer[j + 1] = static_cast<int>(kept.size());
+      }
+      matrix.resize(A.rows(), A.cols());
+      matrix.resizeNonZeros(static_cast<Eigen::Index>(kept.size()));
+      std::copy(outer.begin(), outer.end(), matrix.outerIndexPtr());
+      for (std::size_t i = 0; i < kept.size(); ++i) matrix.innerIndexPtr()[i] = caller.inner[kept[i]];
+    }
+    double* m = matrix.valuePtr();
+    for (std::size_t i = 0; i < kept.size(); ++i) m[i] = v[kept[i]];
+    return grew;
+  }
+};
+
 struct LinearSolver::Impl {
+  UsedPattern used;
   CholmodCholesky cholmod;
   Eigen::UmfPackLU<SparseMatrix> umfpack;
   // Mutable: klu_solve takes its workspace from the (non-const) common object.
@@ -140,12 +187,17 @@ void LinearSolver::analyze(const SparseMatrix& A) {
     case SolverKind::umfpack: impl_->umfpack.analyzePattern(A); break;
     case SolverKind::klu: impl_->klu.analyze(A); break;
   }
-  analyzed_rows_ = A.rows();
-  analyzed_nnz_ = A.nonZeros();
+  ++n_analyses_;
 }
 
-void LinearSolver::factorize(const SparseMatrix& A) {
-  if (A.rows() != analyzed_rows_ || A.nonZeros() != analyzed_nnz_) analyze(A);
+void LinearSolver::factorize(const SparseMatrix& caller_matrix) {
+  SparseMatrix compressed;
+  if (!caller_matrix.isCompressed()) {
+    compressed = caller_matrix;
+    compressed.makeCompressed();
+  }
+  if (impl_->used.take(caller_matrix.isCompressed() ? caller_matrix : compressed)) analyze(impl_->used.matrix);
+  const SparseMatrix& A = impl_->used.matrix;
   Eigen::ComputationInfo info = Eigen::Success;
   switch (kind_) {
     case SolverKind::cholmod:
@@ -336,6 +388,11 @@ struct PreconditionedGmres::Impl {
 
 PreconditionedGmres::PreconditionedGmres() : impl_(std::make_unique<Impl>()) {
   impl_->umfpack.set_refinement_steps(0);  // GMRES corrects the preconditioner's error anyway
+}
+
+void PreconditionedGmres::set_supernodal(bool on) {
+  impl_->cholmod.impl_->cholmod.cholmod().supernodal = on ? CHOLMOD_SUPERNODAL : CHOLMOD_AUTO;
+  impl_->cholmod.impl_->used = UsedPattern{};  // the next factorisation analyses afresh
 }
 PreconditionedGmres::~PreconditionedGmres() = default;
 PreconditionedGmres::PreconditionedGmres(PreconditionedGmres&&) noexcept = default;

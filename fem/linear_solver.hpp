@@ -4,6 +4,17 @@
 // friction), UMFPACK and KLU for general unsymmetric ones (friction, the thermal
 // tangent with the λ_m blend). The symbolic analysis is done
 // once per sparsity pattern and reused by every numerical factorisation.
+//
+// The factorised pattern is that of the entries that have been nonzero in some
+// matrix factorised since the caller's pattern was set, not the caller's whole
+// pattern: an assembled contact pattern holds every coupling a contact point might
+// reach (each slave face with all master faces within the search margin), and most of
+// those entries stay exactly zero. They add no value but much fill: on the default
+// weld's thermal tangent 2.3·10⁷ against 0.8–1.1·10⁷ flops per factorisation, on the
+// mechanics tangent's symmetric part 8.9·10⁷ against 3.5·10⁷ (docs/PERFORMANCE.md,
+// session 19). Dropping exact zeros changes nothing in the factorised matrix; the
+// pattern only grows (a new nonzero entry, such as a contact point reaching another
+// master face, is taken in with a new analysis), so the analysis is redone rarely.
 #pragma once
 
 #include "fem/assembler.hpp"
@@ -30,9 +41,8 @@ class LinearSolver {
   LinearSolver& operator=(LinearSolver&&) noexcept;
 
   SolverKind kind() const { return kind_; }
-  // Symbolic analysis (fill-reducing ordering); repeated automatically when the
-  // pattern size changes.
-  void analyze(const SparseMatrix& A);
+  // Symbolic analyses so far (the used pattern grew, or the caller's pattern changed).
+  int n_analyses() const { return n_analyses_; }
   // Numerical factorisation; throws std::runtime_error if the matrix is singular or,
   // for CHOLMOD, not positive definite. KLU refactorises a matrix of the last
   // factorisation's pattern with that factorisation's pivot sequence while the pivots
@@ -53,7 +63,8 @@ class LinearSolver {
   struct Impl;
   SolverKind kind_;
   std::unique_ptr<Impl> impl_;
-  Eigen::Index analyzed_rows_ = -1, analyzed_nnz_ = -1;
+  int n_analyses_ = 0;
+  void analyze(const SparseMatrix& A);  // of the used pattern
 };
 
 // Componentwise relative backward error of an approximate solution x of A x = b
@@ -118,6 +129,13 @@ class PreconditionedGmres {
   void reset() { kind_ = Kind::none; }
   // Apply supernodal Cholesky factors in single precision (the default), or never.
   void set_single_precision(bool on) { single_precision_ = on; }
+  // Factorise the symmetric part supernodally always (on), or where CHOLMOD's flop
+  // count per factor entry says so (the default; LinearSolver). Only a supernodal
+  // factor is applied in single precision: for a large factor, whose solves stream
+  // it from memory, that pays even where the flop count would choose the simplicial
+  // factorisation (the default weld's mechanics tangent, 56 flops per entry once its
+  // never-used contact entries are left out: docs/PERFORMANCE.md, session 19).
+  void set_supernodal(bool on);
   // The current preconditioner is applied in single precision.
   bool single_precision_active() const;
   int n_factorizations() const { return n_factorizations_; }

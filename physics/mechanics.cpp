@@ -244,6 +244,11 @@ struct Mechanics::Impl {
     // Newton iteration (elastic_matrix below): only the changed ones are scattered.
     force_assembler->enable_cell_matrix_cache();
     displacement_assembler->enable_cell_matrix_cache();
+    // The preconditioner's factor is large (6·10⁵ entries on the paper's mesh) and
+    // its two triangular solves per GMRES iteration stream it from memory: supernodal,
+    // so that it is applied in single precision (fem/linear_solver.hpp).
+    force_gmres.set_supernodal(true);
+    displacement_gmres.set_supernodal(true);
 
     const std::size_t n_points = static_cast<std::size_t>(mesh.n_cells()) * n_q;
     point_cache.assign(n_points, PointCache{});

@@ -403,7 +403,8 @@ fem::SparseMatrix skewed_conduction_3d(int n, double skew) {
 // iterations reach 10⁻¹² (a wrong factor copy would not converge at all); where a
 // fresh float factor cannot converge within the allowed iterations, the refreshing
 // solve repeats with the double factor. A scalar 2D conduction matrix, factorised
-// column by column, stays in double precision.
+// column by column, stays in double precision, unless supernodal factors are asked
+// for (set_supernodal).
 TEST(PreconditionedGmres, SinglePrecisionFactorGivesTheDoublePrecisionSolution) {
   const fem::SparseMatrix A = skewed_conduction_3d(16, 0.2), S = skewed_conduction_3d(16, 0.0);
   const Eigen::VectorXd b = scaled_sine(A);
@@ -448,6 +449,14 @@ TEST(PreconditionedGmres, SinglePrecisionFactorGivesTheDoublePrecisionSolution) 
   const fem::SparseMatrix P = skewed_conduction(30, 0.3, 1e-3);
   single.set_preconditioner(P);
   EXPECT_FALSE(single.single_precision_active());
+  // Asked to factorise supernodally, it does so, and applies the factor in float.
+  single.set_supernodal(true);
+  single.set_preconditioner(P);
+  EXPECT_TRUE(single.single_precision_active());
+  const Eigen::VectorXd d = scaled_sine(P);
+  const Eigen::VectorXd direct = lu.solve(P, d);
+  EXPECT_TRUE(single.solve(P, d, x, 1e-12, 100).converged);
+  EXPECT_LT((x - direct).norm() / direct.norm(), 1e-10);
 }
 
 // A positive definite 3D conduction matrix K (factorised supernodally, like the
@@ -560,3 +569,54 @@ TEST(LinearSolver, DirectSolveOfWildlyScaledChainHasRoundOffBackwardError) {
   EXPECT_GT((b - A * x).norm() / b.norm(), 1e-6);
 }
 
+
+// An assembled contact pattern holds couplings that are never used (exact zeros).
+// A symmetric positive definite conduction matrix with 40 such zero couplings
+// between distant nodes (and their mirrors) is factorised on the pattern of its
+// nonzero entries: each solver's solution equals that of the matrix without them
+// bit for bit (the same matrix is factorised) after one analysis, and new values of
+// the same nonzeros need none. A coupling that becomes nonzero (c between nodes p and
+// q, with c added to both diagonals) is taken in by a second analysis, and the
+// solution is that of a fresh solver to 10⁻¹²; when it returns to zero it stays in
+// the factorised pattern (no third analysis) and the solution is still exact.
+TEST(LinearSolver, FactorisesOnlyTheEntriesThatWereEverNonzero) {
+  const int n = 30;
+  const fem::SparseMatrix plain = skewed_conduction(n, 0.0, 1e-3);
+  std::vector<Eigen::Triplet<double>> t;
+  for (int k = 0; k < plain.outerSize(); ++k)
+    for (fem::SparseMatrix::InnerIterator it(plain, k); it; ++it) t.emplace_back(it.row(), it.col(), it.value());
+  std::vector<std::pair<int, int>> unused;
+  for (int k = 0; k < 40; ++k) unused.push_back({k * 7, n * n - 1 - k * 11});
+  for (const auto& [p, q] : unused) {
+    t.emplace_back(p, q, 0.0);
+    t.emplace_back(q, p, 0.0);
+  }
+  fem::SparseMatrix padded(n * n, n * n);
+  padded.setFromTriplets(t.begin(), t.end());
+  ASSERT_EQ(padded.nonZeros(), plain.nonZeros() + 80);
+  const Eigen::VectorXd b = scaled_sine(plain);
+  for (auto kind : {fem::SolverKind::cholmod, fem::SolverKind::umfpack, fem::SolverKind::klu}) {
+    fem::LinearSolver solver(kind), reference(kind);
+    EXPECT_EQ(solver.solve(padded, b), reference.solve(plain, b)) << fem::to_string(kind);
+    EXPECT_EQ(solver.n_analyses(), 1) << fem::to_string(kind);
+    fem::SparseMatrix scaled = 2.0 * padded;
+    EXPECT_EQ(solver.solve(scaled, b), reference.solve(2.0 * plain, b)) << fem::to_string(kind);
+    EXPECT_EQ(solver.n_analyses(), 1) << fem::to_string(kind);
+
+    const auto [p, q] = unused[5];
+    fem::SparseMatrix coupled = padded;
+    const double c = coupled.coeff(p, p);
+    coupled.coeffRef(p, q) = coupled.coeffRef(q, p) = -c;
+    coupled.coeffRef(p, p) += c;
+    coupled.coeffRef(q, q) += c;
+    ASSERT_EQ(coupled.nonZeros(), padded.nonZeros());
+    fem::LinearSolver fresh(kind);
+    const Eigen::VectorXd x = solver.solve(coupled, b), y = fresh.solve(coupled, b);
+    EXPECT_EQ(solver.n_analyses(), 2) << fem::to_string(kind);
+    EXPECT_LT((x - y).norm(), 1e-12 * y.norm()) << fem::to_string(kind);
+    EXPECT_GT((x - reference.solve(plain, b)).norm(), 1e-6 * y.norm()) << "the coupling changes the solution";
+    const Eigen::VectorXd z = solver.solve(padded, b), w = reference.solve(plain, b);
+    EXPECT_EQ(solver.n_analyses(), 2) << fem::to_string(kind);
+    EXPECT_LT((z - w).norm(), 1e-12 * w.norm()) << fem::to_string(kind);
+  }
+}
