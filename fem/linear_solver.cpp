@@ -49,7 +49,8 @@ struct PatternCopy {
 // KLU through its C interface (Eigen's wrapper always factorises afresh): a matrix of
 // the pattern of the last factorisation is refactorised with that factorisation's
 // pivot sequence (klu_refactor, no pivot search: 6.4 against 13.4 ms on the
-// default weld's 8166-unknown thermal tangent, docs/PERFORMANCE.md). The old pivots
+// default weld's 8166-unknown thermal tangent with its whole contact pattern; 2.7–3.6
+// ms on the entries ever nonzero, docs/PERFORMANCE.md). The old pivots
 // can be poor for the new values; the refactorisation is kept only while the
 // reciprocal pivot ratio min|u_ii|/max|u_ii| (klu_rcond) stays above 10⁻³ of that of
 // the last pivoted factorisation, else the matrix is factorised afresh.
@@ -174,7 +175,10 @@ LinearSolver::LinearSolver(SolverKind kind) : kind_(kind), impl_(std::make_uniqu
   // matrices (43 flops per nonzero) factorise in 4.9 ms and solve in 0.21 ms
   // column by column against 6.0 and 0.35 ms supernodally; the 16 155-unknown
   // mechanics tangent (87) takes 15 ms and 0.82 ms supernodally against 31 and 0.68
-  // ms. CHOLMOD's default switch, 40, would send both the supernodal way.
+  // ms. CHOLMOD's default switch, 40, would send both the supernodal way. (Figures of
+  // the whole contact patterns; on the entries ever nonzero the mechanics tangent has
+  // 56 flops per nonzero, and its preconditioner asks for a supernodal factor:
+  // PreconditionedGmres::set_supernodal.)
   impl_->cholmod.cholmod().supernodal_switch = 80;
 }
 LinearSolver::~LinearSolver() = default;
