@@ -127,7 +127,8 @@ Assembler::Assembler(const Mesh& mesh, const DofMap& dofs, const Constraints& co
     if (colour[e] >= 0) colours_[colour[e]].push_back(e);
 }
 
-void Assembler::scatter_vector(int element, const LocalSystem& local, Eigen::VectorXd& F, bool homogeneous) const {
+void Assembler::scatter_vector(int element, const Eigen::VectorXd& vector, const double* matrix, Eigen::VectorXd& F,
+                               bool homogeneous) const {
   const auto& cd = element_dofs_[element];
   const int n_local = static_cast<int>(cd.size());
   const int* start = expansion_start_.data() + offset_[element];
@@ -138,12 +139,13 @@ void Assembler::scatter_vector(int element, const LocalSystem& local, Eigen::Vec
       for (int i = start[a]; i < start[a + 1]; ++i) F[terms[i].dof] += terms[i].weight * rhs[a];
   };
   if (homogeneous) {
-    add(local.vector);
+    add(vector);
   } else {
-    Eigen::VectorXd rhs = local.vector;
+    const Eigen::Map<const Eigen::MatrixXd> K_e(matrix, n_local, n_local);
+    Eigen::VectorXd rhs = vector;
     for (int b = 0; b < n_local; ++b) {
       const double g = constraints_.inhomogeneity(cd[b]);
-      if (g != 0.0) rhs -= local.matrix.col(b) * g;
+      if (g != 0.0) rhs -= K_e.col(b) * g;
     }
     add(rhs);
   }
@@ -179,7 +181,9 @@ void Assembler::scatter_matrix(int element, const double* matrix, int n_local, d
 
 void Assembler::scatter(int element, const LocalSystem& local, SparseMatrix& K, Eigen::VectorXd& F,
                         bool homogeneous, bool assemble_matrix) const {
-  scatter_vector(element, local, F, homogeneous);
+  if (local.matrix_kept)
+    throw std::logic_error("Assembler: a kernel kept its matrix, but no cell matrices are cached");
+  scatter_vector(element, local.vector, local.matrix.data(), F, homogeneous);
   if (assemble_matrix)
     scatter_matrix(element, local.matrix.data(), static_cast<int>(local.matrix.rows()), K.valuePtr());
 }
@@ -194,10 +198,17 @@ void Assembler::enable_cell_matrix_cache() {
 
 void Assembler::scatter_cached(int cell, const LocalSystem& local, Eigen::VectorXd& F, bool homogeneous,
                                bool rebuild) const {
-  scatter_vector(cell, local, F, homogeneous);
-  const int n_local = static_cast<int>(local.matrix.rows());
+  const int n_local = dofs_.dofs_per_cell();
   const std::size_t size = static_cast<std::size_t>(n_local) * n_local;
   double* kept = cache_matrices_.data() + static_cast<std::size_t>(cell) * size;
+  scatter_vector(cell, local.vector, local.matrix_kept ? kept : local.matrix.data(), F, homogeneous);
+  if (local.matrix_kept) {
+    if (rebuild)
+      scatter_matrix(cell, kept, n_local, cache_sum_.data());
+    else
+      cache_reused_.fetch_add(1, std::memory_order_relaxed);
+    return;
+  }
   const double* now = local.matrix.data();
   if (rebuild) {
     std::copy(now, now + size, kept);
@@ -255,6 +266,7 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
     for (int e = 0; e < mesh_.n_cells(); ++e) {
       local.matrix.setZero(n_local, n_local);
       local.vector.setZero(n_local);
+      local.matrix_kept = false;
       cell_kernel(e, local);
       scatter_cell(e, local);
     }
@@ -275,6 +287,7 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
           try {
             local.matrix.setZero(n_local, n_local);
             local.vector.setZero(n_local);
+            local.matrix_kept = false;
             cell_kernel(cells[k], local);
             scatter_cell(cells[k], local);
           } catch (...) {
@@ -293,6 +306,7 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
     for (int e : serial_cells_) {
       local.matrix.setZero(n_local, n_local);
       local.vector.setZero(n_local);
+      local.matrix_kept = false;
       cell_kernel(e, local);
       scatter_cell(e, local);
     }
@@ -305,6 +319,7 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
     for (const auto& face : *term.faces) {
       local.matrix.setZero(n_local, n_local);
       local.vector.setZero(n_local);
+      local.matrix_kept = false;
       term.kernel(face, local);
       scatter(face.cell, local, K, F, homogeneous, assemble_matrix);
     }
@@ -314,6 +329,7 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
       const int n = static_cast<int>(element_dofs_[n_cells + g].size());
       local.matrix.setZero(n, n);
       local.vector.setZero(n);
+      local.matrix_kept = false;
       terms.groups(g, local);
       scatter(n_cells + g, local, K, F, homogeneous, assemble_matrix);
     }

@@ -27,7 +27,9 @@
 // into S, and the matrix starts as a copy of S before the face and group terms are
 // added. The result equals a fresh assembly to round-off (the sum is formed in
 // another order); S is rebuilt from scratch every 64th matrix assembly so that the
-// rounding of the differences cannot accumulate.
+// rounding of the differences cannot accumulate. A kernel that knows its matrix is
+// unchanged says so (LocalSystem::matrix_kept) and skips forming it: the elastic
+// cells of a mechanics Newton iteration, most of the mesh.
 #pragma once
 
 #include "fem/constraints.hpp"
@@ -49,6 +51,10 @@ using SparseMatrix = Eigen::SparseMatrix<double>;  // column-major, as SuiteSpar
 struct LocalSystem {
   Eigen::MatrixXd matrix;  // K_e, dofs_per_cell x dofs_per_cell
   Eigen::VectorXd vector;  // F_e
+  // Set by a cell kernel, instead of filling `matrix`, when the cell's matrix is bit for
+  // bit the one it returned in its last matrix assembly by this assembler (only with
+  // the cell-matrix cache, which then reuses its copy: enable_cell_matrix_cache()).
+  bool matrix_kept = false;
 };
 
 class Assembler {
@@ -103,7 +109,10 @@ class Assembler {
   // Element e: cells first (e < n_cells), then coupling groups.
   void scatter(int element, const LocalSystem& local, SparseMatrix& K, Eigen::VectorXd& F,
                bool homogeneous, bool assemble_matrix) const;
-  void scatter_vector(int element, const LocalSystem& local, Eigen::VectorXd& F, bool homogeneous) const;
+  // F_e − K_e g into F; `matrix` (column-major, n_local²) is K_e, read only for
+  // inhomogeneous constraints.
+  void scatter_vector(int element, const Eigen::VectorXd& vector, const double* matrix, Eigen::VectorXd& F,
+                      bool homogeneous) const;
   // values[position] += the condensed entries of the local matrix `matrix` (column-major,
   // n_local x n_local) of `element`; zero entries are skipped.
   void scatter_matrix(int element, const double* matrix, int n_local, double* values) const;

@@ -257,6 +257,7 @@ struct Mechanics::Impl {
     coefficient_stamp.assign(mesh.n_cells(), 0);
     elastic_matrix.resize(mesh.n_cells());
     elastic_stamp.assign(mesh.n_cells(), 0);
+    for (auto& stamps : returned_elastic) stamps.assign(mesh.n_cells(), 0);
     linear_increment.resize(mesh.n_cells());
     linear_force.resize(mesh.n_cells());
     linear_reach.assign(mesh.n_cells(), -1.0);
@@ -304,6 +305,12 @@ struct Mechanics::Impl {
   // sheet) stay elastic. Bit for bit what the kernel would compute.
   std::vector<Eigen::Matrix<double, 8, 8>> elastic_matrix;
   std::vector<int> elastic_stamp;  // the coefficient generation of elastic_matrix[e]; 0: none
+  // Per assembler (force, displacement control): the coefficient generation whose
+  // elastic_matrix[e] the cell returned in its last matrix assembly there, 0 if it
+  // returned another matrix. While it is current the cell tells the assembler that its
+  // matrix is kept (fem::LocalSystem::matrix_kept) instead of copying it out again.
+  std::array<std::vector<int>, 2> returned_elastic;
+  int assembling = 0;  // evaluate(): 0 force, 1 displacement control
   // Linear update of an elastic cell. Within a step an elastic cell's force is linear
   // in its displacements: f_e(Δu) = f_e(Δu*) − K_e (Δu − Δu*), K_e = elastic_matrix[e],
   // exact while every Gauss point stays elastic. Δu* is the increment of the cell's
@@ -431,7 +438,15 @@ struct Mechanics::Impl {
       for (int a = 0; a < 4; ++a) distance += d[2 * a] * d[2 * a] + (d[2 * a + 1] - mean_z) * (d[2 * a + 1] - mean_z);
       if (distance <= linear_reach[e] * linear_reach[e]) {
         local.vector.noalias() += linear_force[e] - elastic_matrix[e] * d;
-        if (need_matrix) local.matrix += elastic_matrix[e];
+        if (need_matrix) {
+          int& returned = returned_elastic[assembling][e];
+          if (returned == coefficient_generation) {
+            local.matrix_kept = true;
+          } else {
+            local.matrix += elastic_matrix[e];
+            returned = coefficient_generation;
+          }
+        }
         linear_stale[e] = 1;
         linear_count.fetch_add(1, std::memory_order_relaxed);
         return;
@@ -482,6 +497,9 @@ struct Mechanics::Impl {
       }
     }
     linear_stale[e] = 0;
+    if (need_matrix)  // the matrix returned below is elastic_matrix[e] exactly when elastic without foundation
+      returned_elastic[assembling][e] =
+          elastic && kappa == 0 && elastic_stamp[e] == coefficient_generation ? coefficient_generation : 0;
     if (elastic && settings.linear_elastic_updates && kappa == 0 && reach > 0) {
       linear_increment[e] = du;
       linear_force[e] = Fe;
@@ -670,6 +688,7 @@ struct Mechanics::Impl {
                              }});
     }
     need_matrix = matrix;
+    assembling = ctrl == Control::force ? 0 : 1;
     assembler.assemble(terms, K, R, /*homogeneous=*/true, matrix);
     need_matrix = true;
     if (ctrl == Control::force) {

@@ -188,6 +188,69 @@ TEST(Assembler, IncrementalCellMatricesEqualAFreshAssembly) {
   EXPECT_LT((Eigen::MatrixXd(K) - Eigen::MatrixXd(K_fresh)).norm(), 1e-13 * Eigen::MatrixXd(K_fresh).norm());
 }
 
+// Kept cell matrices: a kernel that says its matrix is the one it returned last
+// (LocalSystem::matrix_kept) instead of forming it gives the fresh assembly of the
+// formed matrices (to round-off, F exactly), through the rebuilds of the cache (the
+// first assembly, every 64th, and the one after a kernel threw), on one thread and
+// on two. Kept cells count as reused. An assembler without the cache refuses a kept
+// matrix.
+TEST(Assembler, KeptCellMatricesEqualAFreshAssembly) {
+  const ConstrainedScalarMesh problem;
+  const fem::Mesh& mesh = problem.mesh;
+  const fem::DofMap& dofs = problem.dofs;
+  const fem::Constraints& c = problem.c;
+  fem::Assembler fresh(mesh, dofs, c), incremental(mesh, dofs, c);
+  incremental.enable_cell_matrix_cache();
+  const int n_cells = mesh.n_cells();
+  std::vector<double> scale(n_cells, 1.0), returned(n_cells, 0.0);  // 0: nothing returned yet
+  auto formed = [&](int e, fem::LocalSystem& l) {
+    laplace_kernel(mesh, e, l);
+    l.matrix *= scale[e];
+  };
+  auto keeping = [&](int e, fem::LocalSystem& l) {
+    formed(e, l);
+    if (returned[e] == scale[e]) {
+      l.matrix.setZero();  // not formed: the assembler must use its own copy
+      l.matrix_kept = true;
+    }
+    returned[e] = scale[e];
+  };
+  fem::SparseMatrix K_fresh, K;
+  Eigen::VectorXd F_fresh, F;
+  long kept = 0;
+  for (int round = 0; round < 70; ++round) {
+    fem::use_threads(round % 2 + 1);
+    if (round > 0)
+      for (int e = 0; e < n_cells; ++e)
+        if ((e * 3 + round) % 4 == 0) scale[e] = 1.0 + 0.1 * ((e + round) % 7);
+    if (round == 20 || round == 63) {  // a kernel throws halfway (round 63: before a rebuild)
+      EXPECT_THROW(incremental.assemble(
+                       [&](int e, fem::LocalSystem& l) {
+                         if (e == n_cells / 2) throw std::runtime_error("cell is inverted");
+                         keeping(e, l);
+                       },
+                       K, F),
+                   std::runtime_error);
+    }
+    for (int e = 0; e < n_cells; ++e) kept += returned[e] == scale[e];
+    fresh.assemble(formed, K_fresh, F_fresh);
+    incremental.assemble(keeping, K, F);
+    const Eigen::MatrixXd difference = Eigen::MatrixXd(K) - Eigen::MatrixXd(K_fresh);
+    EXPECT_LT(difference.norm(), 1e-13 * Eigen::MatrixXd(K_fresh).norm()) << "round " << round;
+    EXPECT_EQ((F - F_fresh).norm(), 0.0) << "round " << round;
+  }
+  fem::use_threads(1);
+  EXPECT_GT(kept, 30L * n_cells);
+  EXPECT_GE(incremental.cell_matrices_reused(), kept - 3L * n_cells);  // less the rebuilds' cells
+  EXPECT_THROW(fresh.assemble(
+                   [&](int e, fem::LocalSystem& l) {
+                     formed(e, l);
+                     l.matrix_kept = true;
+                   },
+                   K_fresh, F_fresh),
+               std::logic_error);
+}
+
 TEST(LinearSolver, CholmodUmfpackAndKluAgreeAndDirichletValuesAreExact) {
   const ConstrainedScalarMesh problem;
   const fem::Mesh& mesh = problem.mesh;
