@@ -48,6 +48,13 @@ struct ConstrainedScalarMesh {
     c.close();
   }
 };
+
+// The problem above with two assemblers of it: `fresh` without, `incremental` with the
+// cell-matrix cache.
+struct CachedAndFresh : ConstrainedScalarMesh {
+  fem::Assembler fresh{mesh, dofs, c}, incremental{mesh, dofs, c};
+  CachedAndFresh() { incremental.enable_cell_matrix_cache(); }
+};
 }  // namespace
 
 TEST(Assembler, CondensedSystemEqualsExplicitProlongation) {
@@ -123,12 +130,9 @@ TEST(Assembler, ExceptionOfACellKernelReachesTheCaller) {
 // through leaves the next assembly correct, and so do 2 threads and more than 64
 // assemblies (the periodic rebuild).
 TEST(Assembler, IncrementalCellMatricesEqualAFreshAssembly) {
-  const ConstrainedScalarMesh problem;
+  CachedAndFresh problem;
   const fem::Mesh& mesh = problem.mesh;
-  const fem::DofMap& dofs = problem.dofs;
-  const fem::Constraints& c = problem.c;
-  fem::Assembler fresh(mesh, dofs, c), incremental(mesh, dofs, c);
-  incremental.enable_cell_matrix_cache();
+  fem::Assembler &fresh = problem.fresh, &incremental = problem.incremental;
   const int n_cells = mesh.n_cells();
   std::vector<double> scale(n_cells, 1.0);
   auto kernel = [&](int e, fem::LocalSystem& l) {
@@ -195,12 +199,9 @@ TEST(Assembler, IncrementalCellMatricesEqualAFreshAssembly) {
 // on two. Kept cells count as reused. An assembler without the cache refuses a kept
 // matrix.
 TEST(Assembler, KeptCellMatricesEqualAFreshAssembly) {
-  const ConstrainedScalarMesh problem;
+  CachedAndFresh problem;
   const fem::Mesh& mesh = problem.mesh;
-  const fem::DofMap& dofs = problem.dofs;
-  const fem::Constraints& c = problem.c;
-  fem::Assembler fresh(mesh, dofs, c), incremental(mesh, dofs, c);
-  incremental.enable_cell_matrix_cache();
+  fem::Assembler &fresh = problem.fresh, &incremental = problem.incremental;
   const int n_cells = mesh.n_cells();
   std::vector<double> scale(n_cells, 1.0), returned(n_cells, 0.0);  // 0: nothing returned yet
   auto formed = [&](int e, fem::LocalSystem& l) {
