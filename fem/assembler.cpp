@@ -4,6 +4,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <exception>
@@ -82,12 +83,12 @@ Assembler::Assembler(const Mesh& mesh, const DofMap& dofs, const Constraints& co
   offset_[n_elements] = static_cast<int>(expansion_start_.size());
   expansion_start_.push_back(static_cast<int>(expansion_.size()));
 
-  // Greedy colouring: cells sharing a free dof get different colours. Cells touching
-  // a hub dof (one shared by many cells, such as the rigid motion of an electrode end
-  // face) are assembled serially after the colours instead.
+  // Cells touching a hub dof (one shared by more than 16 cells, such as the rigid
+  // motion of an electrode end face) are assembled serially after the others.
   std::vector<int> n_cells_of(n, 0);
+  reduced_dofs_.resize(n_cells);
   for (int e = 0; e < n_cells; ++e) {
-    std::vector<int> reduced;
+    std::vector<int>& reduced = reduced_dofs_[e];
     for (int d : element_dofs_[e]) {
       auto [b, end] = constraints.expansion(d);
       for (auto it = b; it != end; ++it) reduced.push_back(it->dof);
@@ -97,34 +98,34 @@ Assembler::Assembler(const Mesh& mesh, const DofMap& dofs, const Constraints& co
     for (int p : reduced) ++n_cells_of[p];
   }
   constexpr int hub = 16;
-  std::vector<std::uint64_t> used(n, 0);
-  std::vector<int> colour(n_cells, -1);
-  int n_colours = 0;
-  for (int e = 0; e < n_cells; ++e) {
-    std::uint64_t forbidden = 0;
-    std::vector<int> reduced;
-    bool touches_hub = false;
-    for (int d : element_dofs_[e]) {
-      auto [b, end] = constraints.expansion(d);
-      for (auto it = b; it != end; ++it) {
-        forbidden |= used[it->dof];
-        reduced.push_back(it->dof);
-        touches_hub = touches_hub || n_cells_of[it->dof] > hub;
-      }
-    }
-    int c = 0;
-    while (c < 64 && (forbidden >> c & 1u)) ++c;
-    if (touches_hub || c == 64) {
-      serial_cells_.push_back(e);
-      continue;
-    }
-    colour[e] = c;
-    for (int p : reduced) used[p] |= std::uint64_t{1} << c;
-    n_colours = std::max(n_colours, c + 1);
-  }
-  colours_.assign(n_colours, {});
   for (int e = 0; e < n_cells; ++e)
-    if (colour[e] >= 0) colours_[colour[e]].push_back(e);
+    if (std::any_of(reduced_dofs_[e].begin(), reduced_dofs_[e].end(), [&](int p) { return n_cells_of[p] > hub; }))
+      serial_cells_.push_back(e);
+}
+
+void Assembler::partition(int n_threads) const {
+  // Block t holds the cells t n/T ≤ e < (t + 1) n/T (the mesh numbers neighbouring
+  // cells close together); a cell all of whose free dofs are touched only by cells of
+  // its own block is assembled by that block's thread, the others (along the block
+  // borders) serially afterwards. No two threads then write the same entry.
+  const int n_cells = mesh_.n_cells();
+  blocks_.assign(n_threads, {});
+  border_cells_.clear();
+  std::vector<char> serial(n_cells, 0);
+  for (int e : serial_cells_) serial[e] = 1;
+  auto block_of = [&](int e) { return static_cast<int>(static_cast<long>(e) * n_threads / n_cells); };
+  std::vector<int> owner(constraints_.n_free(), -1);  // block of the cells touching a dof; -2: several
+  for (int e = 0; e < n_cells; ++e) {
+    if (serial[e]) continue;
+    for (int p : reduced_dofs_[e]) owner[p] = owner[p] == -1 || owner[p] == block_of(e) ? block_of(e) : -2;
+  }
+  for (int e = 0; e < n_cells; ++e) {
+    if (serial[e]) continue;
+    const bool inside = std::all_of(reduced_dofs_[e].begin(), reduced_dofs_[e].end(),
+                                    [&](int p) { return owner[p] == block_of(e); });
+    (inside ? blocks_[block_of(e)] : border_cells_).push_back(e);
+  }
+  partitioned_threads_ = n_threads;
 }
 
 void Assembler::scatter_vector(int element, const Eigen::VectorXd& vector, const double* matrix, Eigen::VectorXd& F,
@@ -274,42 +275,42 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
     // An exception may not leave an OpenMP region (the process would terminate): the
     // first one thrown by a cell kernel is kept, the remaining cells are skipped, and
     // it is rethrown after the region.
+    const int n_threads = omp_get_max_threads();
+    if (partitioned_threads_ != n_threads) partition(n_threads);
     std::exception_ptr failure;
     std::atomic<bool> failed{false};
-    for (const auto& cells : colours_) {
-      const int n = static_cast<int>(cells.size());
 #pragma omp parallel
-      {
-        LocalSystem local;
-#pragma omp for schedule(static)
-        for (int k = 0; k < n; ++k) {
-          if (failed.load(std::memory_order_relaxed)) continue;
+    {
+      LocalSystem local;
+      for (int b = omp_get_thread_num(); b < n_threads; b += omp_get_num_threads())
+        for (const int e : blocks_[b]) {
+          if (failed.load(std::memory_order_relaxed)) break;
           try {
             local.matrix.setZero(n_local, n_local);
             local.vector.setZero(n_local);
             local.matrix_kept = false;
-            cell_kernel(cells[k], local);
-            scatter_cell(cells[k], local);
+            cell_kernel(e, local);
+            scatter_cell(e, local);
           } catch (...) {
 #pragma omp critical(rsw_assembler_failure)
             if (!failed.exchange(true)) failure = std::current_exception();
           }
         }
-      }
-      if (failure) std::rethrow_exception(failure);
     }
+    if (failure) std::rethrow_exception(failure);
   }
-  // Cells on hub dofs (threaded runs; one thread visited them above), face terms and
-  // coupling groups: serial.
+  // Cells on block borders and hub dofs (threaded runs; one thread visited them
+  // above), face terms and coupling groups: serial.
   LocalSystem local;
   if (cell_kernel && omp_get_max_threads() > 1)
-    for (int e : serial_cells_) {
-      local.matrix.setZero(n_local, n_local);
-      local.vector.setZero(n_local);
-      local.matrix_kept = false;
-      cell_kernel(e, local);
-      scatter_cell(e, local);
-    }
+    for (const std::vector<int>* cells : std::array<const std::vector<int>*, 2>{&border_cells_, &serial_cells_})
+      for (int e : *cells) {
+        local.matrix.setZero(n_local, n_local);
+        local.vector.setZero(n_local);
+        local.matrix_kept = false;
+        cell_kernel(e, local);
+        scatter_cell(e, local);
+      }
   if (cached) {
     cache_complete_ = true;
     cache_assemblies_ = (cache_assemblies_ + 1) % 64;

@@ -7,17 +7,18 @@
 // P^T K P and P^T (F - K g) without forming P. The sparsity pattern and the
 // position of every contribution in it are computed once, so re-assembly (every
 // Newton iteration and time step) only zeroes and accumulates values. Cells are
-// coloured so that no two cells of one colour share a free dof; with more than one
-// OpenMP thread each colour is assembled in parallel (kernels must then be
-// thread-safe: keep scratch such as CellValues in thread_local storage or build it
-// inside the kernel), and cells on a dof shared by more than 16 cells (a "hub", e.g.
-// a rigid end face's motion) are assembled serially at the end. With one thread no
-// OpenMP region is entered (each of its barriers costs a system call, even in a team
-// of one) and the cells are visited in their own order, which keeps neighbouring
-// cells' data and matrix entries together in the caches: the colour order, which
-// jumps across the mesh, made the default weld 13 % slower on one core
-// (docs/PERFORMANCE.md, session 19). The sums then differ from the threaded ones in
-// the last bits.
+// visited in their own order, which keeps neighbouring cells' data and matrix entries
+// together in the caches (visiting them colour by colour, across the whole mesh each
+// time, made the default weld 13 % slower on one core: docs/PERFORMANCE.md, session
+// 19). With one thread no OpenMP region is entered (each of its barriers costs a
+// system call, even in a team of one). With T threads the cells are split into T
+// blocks of consecutive numbers; each thread assembles, in order, the cells of its
+// block whose free dofs no other block touches, and the cells on the block borders
+// follow serially (kernels must be thread-safe: keep scratch such as CellValues in
+// thread_local storage or build it inside the kernel). Cells on a dof shared by more
+// than 16 cells (a "hub", e.g. a rigid end face's motion) are assembled serially at
+// the end. Sums over cells are then formed in another order than with one thread, and
+// differ in the last bits.
 //
 // Incremental cell matrices (optional, enable_cell_matrix_cache()): in a Newton
 // iteration most cells often return the same matrix as before (an elastic cell
@@ -89,7 +90,6 @@ class Assembler {
   // assemblies so far, and cells whose unchanged matrix was skipped (cache only).
   long cell_matrices_scattered() const { return cache_scattered_; }
   long cell_matrices_reused() const { return cache_reused_; }
-  int n_colours() const { return static_cast<int>(colours_.size()); }
 
   // Assembles K_red and F_red. `cell_kernel` may be empty (face terms only) and the
   // matrix may be skipped (assemble_matrix = false, e.g. for a residual check).
@@ -139,8 +139,14 @@ class Assembler {
   std::vector<int> expansion_start_;
   std::vector<Term> expansion_;
   std::vector<int> expanded_size_;    // per element, Σ_a |expansion(a)|
-  std::vector<std::vector<int>> colours_;  // cells assembled in parallel, colour by colour
-  std::vector<int> serial_cells_;          // cells on hub dofs, assembled serially
+  std::vector<std::vector<int>> reduced_dofs_;  // per cell, its free dofs (sorted)
+  std::vector<int> serial_cells_;               // cells on hub dofs, assembled serially
+  // Threaded assembly (partition()): per thread count, the cells of each block that
+  // its thread assembles, and the cells on block borders, assembled serially.
+  void partition(int n_threads) const;
+  mutable int partitioned_threads_ = 0;
+  mutable std::vector<std::vector<int>> blocks_;
+  mutable std::vector<int> border_cells_;
   // Incremental cell matrices (mutable: a cache of what the kernels returned).
   bool cache_enabled_ = false;
   mutable std::vector<double> cache_matrices_;  // per cell, its last local matrix (n_local², column-major)
