@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
-#include <cstdint>
 #include <exception>
 #include <stdexcept>
 
@@ -258,11 +257,11 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
   if (cell_kernel && omp_get_max_threads() == 1) {
     // One thread: no OpenMP region at all. Even a one-thread team ends each worksharing
     // loop at a barrier whose last arrival wakes its waiters by a futex system call,
-    // waiters or not: one per colour and assembly (with the kernel's futex path about
-    // 5 % of a default weld's profile on a virtual machine, docs/PERFORMANCE.md).
-    // The cells in their own order (hub cells included), not colour by colour: a
-    // colour's cells lie all over the mesh, and visiting them so cost the default weld
-    // 13 % in cache misses (docs/PERFORMANCE.md, session 19).
+    // waiters or not (with the kernel's futex path about 5 % of a default weld's
+    // profile on a virtual machine, when the threaded loop went colour by colour,
+    // docs/PERFORMANCE.md). The cells in their own order, hub cells included (visiting
+    // them colour by colour, all over the mesh, cost the default weld 13 % in cache
+    // misses: docs/PERFORMANCE.md, session 19).
     LocalSystem local;
     for (int e = 0; e < mesh_.n_cells(); ++e) {
       local.matrix.setZero(n_local, n_local);
