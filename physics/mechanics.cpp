@@ -826,8 +826,8 @@ struct Mechanics::Impl {
       increment = base + step;
       evaluate(ctrl, K_trial, R_trial, true);
       if (target(R_trial).norm() <= (1 - 1e-4) * norm2) {
-        std::swap(K, K_trial);
-        std::swap(R, R_trial);
+        K.swap(K_trial);  // Eigen 3.4.0 SparseMatrix has no move: std::swap would copy it three times
+        R.swap(R_trial);
       } else {
         bool descent = false;
         while (!descent && alpha > 1.0 / 64) {
@@ -902,8 +902,8 @@ struct Mechanics::Impl {
     const double tolerance = settings.residual_tolerance * std::max(load_scale, 1.0);
     const Eigen::VectorXd start = increment;
     if (K_start && R_start) {
-      std::swap(K, *K_start);
-      std::swap(R, *R_start);
+      K.swap(*K_start);
+      R.swap(*R_start);
     } else {
       pairing_within = true;
       evaluate(ctrl, K, R, true);
