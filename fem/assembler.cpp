@@ -68,6 +68,8 @@ Assembler::Assembler(const Mesh& mesh, const DofMap& dofs, const Constraints& co
 
   offset_.resize(n_elements + 1);
   expanded_size_.resize(n_elements);
+  direct_vector_.assign(n_elements, 1);
+  direct_matrix_.assign(n_elements, 1);
   for (int e = 0; e < n_elements; ++e) {
     offset_[e] = static_cast<int>(expansion_start_.size());
     int size = 0;
@@ -76,6 +78,9 @@ Assembler::Assembler(const Mesh& mesh, const DofMap& dofs, const Constraints& co
       auto [b, end] = constraints.expansion(d);
       for (auto it = b; it != end; ++it) expansion_.push_back({it->dof, it->weight});
       size += static_cast<int>(end - b);
+      if (end - b > 1 || (end - b == 1 && b->weight != 1.0)) direct_vector_[e] = 0;
+      if (end - b != 1 || b->weight != 1.0) direct_matrix_[e] = 0;
+      direct_dof_.push_back(end - b == 1 ? b->dof : -1);
     }
     expanded_size_[e] = size;
   }
@@ -133,12 +138,21 @@ void Assembler::scatter_vector(int element, const Eigen::VectorXd& vector, const
   const int n_local = static_cast<int>(cd.size());
   const int* start = expansion_start_.data() + offset_[element];
   const Term* terms = expansion_.data();
-  // F_e - K_e g for inhomogeneous constraints.
   auto add = [&](const Eigen::VectorXd& rhs) {
+    if (direct_vector_[element]) {
+      const int* dof = direct_dof_.data() + offset_[element];
+      for (int a = 0; a < n_local; ++a)
+        if (dof[a] >= 0) F[dof[a]] += rhs[a];
+      return;
+    }
     for (int a = 0; a < n_local; ++a)
       for (int i = start[a]; i < start[a + 1]; ++i) F[terms[i].dof] += terms[i].weight * rhs[a];
   };
-  if (homogeneous) {
+  // F_e - K_e g where the element touches a dof with an inhomogeneous constraint.
+  const bool inhomogeneous = !homogeneous && std::any_of(cd.begin(), cd.end(), [&](int d) {
+    return constraints_.inhomogeneity(d) != 0.0;
+  });
+  if (!inhomogeneous) {
     add(vector);
   } else {
     const Eigen::Map<const Eigen::MatrixXd> K_e(matrix, n_local, n_local);
@@ -157,6 +171,14 @@ void Assembler::scatter_matrix(int element, const double* matrix, int n_local, d
   // Zero entries are skipped (a coupling group's system is mostly zero: each contact
   // point touches four of its nodes); the positions are then advanced past them.
   const int* pos = positions_.data() + position_start_[element];
+  if (direct_matrix_[element]) {  // one position per entry, column by column
+    for (int b = 0; b < n_local; ++b, pos += n_local) {
+      const double* column = matrix + static_cast<std::ptrdiff_t>(b) * n_local;
+      for (int a = 0; a < n_local; ++a)
+        if (column[a] != 0.0) values[pos[a]] += column[a];
+    }
+    return;
+  }
   const int column_size = expanded_size_[element];
   for (int b = 0; b < n_local; ++b) {
     const double* column = matrix + static_cast<std::ptrdiff_t>(b) * n_local;

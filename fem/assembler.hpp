@@ -139,6 +139,12 @@ class Assembler {
   std::vector<int> expansion_start_;
   std::vector<Term> expansion_;
   std::vector<int> expanded_size_;    // per element, Σ_a |expansion(a)|
+  // Per element: 1 if each of its dofs is its own reduced dof (one term of weight 1)
+  // or fixed (no term), as for most cells; the scatter then adds the entries as they
+  // are, the same sums to the bit (the general loop multiplies them by 1). The matrix
+  // path also needs every dof free (a position for every entry).
+  std::vector<char> direct_vector_, direct_matrix_;
+  std::vector<int> direct_dof_;  // parallel to expansion_start_: the reduced dof of a one-term dof, else -1
   std::vector<std::vector<int>> reduced_dofs_;  // per cell, its free dofs (sorted)
   std::vector<int> serial_cells_;               // cells on hub dofs, assembled serially
   // Threaded assembly (partition()): per thread count, the cells of each block that
