@@ -437,7 +437,7 @@ struct Mechanics::Impl {
       double distance = 0;
       for (int a = 0; a < 4; ++a) distance += d[2 * a] * d[2 * a] + (d[2 * a + 1] - mean_z) * (d[2 * a + 1] - mean_z);
       if (distance <= linear_reach[e] * linear_reach[e]) {
-        local.vector.noalias() += linear_force[e] - elastic_matrix[e] * d;
+        local.vector.noalias() += linear_force[e] - elastic_matrix[e].lazyProduct(d);  // 8 x 8: no GEMV call
         if (need_matrix) {
           int& returned = returned_elastic[assembling][e];
           if (returned == coefficient_generation) {
