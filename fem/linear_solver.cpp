@@ -102,9 +102,10 @@ struct KluFactor {
 };
 
 // Eigen's CHOLMOD wrapper with read access to the factor (PreconditionedGmres copies
-// a supernodal one in single precision).
-struct CholmodCholesky : Eigen::CholmodDecomposition<SparseMatrix, Eigen::Lower> {
-  const cholmod_factor* factor() const { return m_cholmodFactor; }  // null before the first factorisation
+// a supernodal one in single precision). UpLo: the triangle handed to CHOLMOD.
+template <int UpLo>
+struct CholmodCholesky : Eigen::CholmodDecomposition<SparseMatrix, UpLo> {
+  const cholmod_factor* factor() const { return this->m_cholmodFactor; }  // null before the first factorisation
 };
 
 // The entries of a caller's matrix that have been nonzero in some matrix of its
@@ -155,7 +156,17 @@ struct UsedPattern {
 
 struct LinearSolver::Impl {
   UsedPattern used;
-  CholmodCholesky cholmod;
+  // CHOLMOD factorises P A Pᵀ: the supernodal code from its lower triangle, the
+  // simplicial one from its upper triangle, and each permuted transpose of the input
+  // costs a pass over it (cholmod_factorize.c). From the lower triangle of A that is
+  // one transpose for the simplicial and two for the supernodal factorisation; from the
+  // upper triangle, one for the supernodal. So the factor that is forced supernodal
+  // (set_supernodal) is handed the upper triangle, every other the lower. The values
+  // factorised are the same: A is symmetric.
+  CholmodCholesky<Eigen::Lower> cholmod;
+  CholmodCholesky<Eigen::Upper> cholmod_upper;
+  bool upper = false;
+  const cholmod_factor* factor() const { return upper ? cholmod_upper.factor() : cholmod.factor(); }
   Eigen::UmfPackLU<SparseMatrix> umfpack;
   // Mutable: klu_solve takes its workspace from the (non-const) common object.
   mutable KluFactor klu;
@@ -169,6 +180,7 @@ LinearSolver::LinearSolver(SolverKind kind) : kind_(kind), impl_(std::make_uniqu
   // A matrix that is not positive definite is reported by the exception of factorize();
   // CHOLMOD's own message on stderr would only repeat it.
   impl_->cholmod.cholmod().print = 0;
+  impl_->cholmod_upper.cholmod().print = 0;
   // CHOLMOD factorises supernodally (dense BLAS blocks) when the factorisation's flops
   // per nonzero of L reach supernodal_switch, else column by column. Measured on the
   // default weld's matrices (docs/PERFORMANCE.md): the 8166-unknown scalar conduction
@@ -180,6 +192,7 @@ LinearSolver::LinearSolver(SolverKind kind) : kind_(kind), impl_(std::make_uniqu
   // 56 flops per nonzero, and its preconditioner asks for a supernodal factor:
   // PreconditionedGmres::set_supernodal.)
   impl_->cholmod.cholmod().supernodal_switch = 80;
+  impl_->cholmod_upper.cholmod().supernodal = CHOLMOD_SUPERNODAL;
 }
 LinearSolver::~LinearSolver() = default;
 LinearSolver::LinearSolver(LinearSolver&&) noexcept = default;
@@ -187,7 +200,12 @@ LinearSolver& LinearSolver::operator=(LinearSolver&&) noexcept = default;
 
 void LinearSolver::analyze(const SparseMatrix& A) {
   switch (kind_) {
-    case SolverKind::cholmod: impl_->cholmod.analyzePattern(A); break;
+    case SolverKind::cholmod:
+      if (impl_->upper)
+        impl_->cholmod_upper.analyzePattern(A);
+      else
+        impl_->cholmod.analyzePattern(A);
+      break;
     case SolverKind::umfpack: impl_->umfpack.analyzePattern(A); break;
     case SolverKind::klu: impl_->klu.analyze(A); break;
   }
@@ -205,8 +223,13 @@ void LinearSolver::factorize(const SparseMatrix& caller_matrix) {
   Eigen::ComputationInfo info = Eigen::Success;
   switch (kind_) {
     case SolverKind::cholmod:
-      impl_->cholmod.factorize(A);
-      info = impl_->cholmod.info();
+      if (impl_->upper) {
+        impl_->cholmod_upper.factorize(A);
+        info = impl_->cholmod_upper.info();
+      } else {
+        impl_->cholmod.factorize(A);
+        info = impl_->cholmod.info();
+      }
       break;
     case SolverKind::umfpack:
       impl_->factorized = A;
@@ -231,7 +254,9 @@ void LinearSolver::set_refinement_steps(int steps) {
 
 Eigen::VectorXd LinearSolver::solve(const Eigen::VectorXd& b) const {
   switch (kind_) {
-    case SolverKind::cholmod: return impl_->cholmod.solve(b);
+    case SolverKind::cholmod:
+      if (impl_->upper) return impl_->cholmod_upper.solve(b);
+      return impl_->cholmod.solve(b);
     case SolverKind::umfpack: return impl_->umfpack.solve(b);
     case SolverKind::klu: return impl_->klu.solve(b);
   }
@@ -395,7 +420,7 @@ PreconditionedGmres::PreconditionedGmres() : impl_(std::make_unique<Impl>()) {
 }
 
 void PreconditionedGmres::set_supernodal(bool on) {
-  impl_->cholmod.impl_->cholmod.cholmod().supernodal = on ? CHOLMOD_SUPERNODAL : CHOLMOD_AUTO;
+  impl_->cholmod.impl_->upper = on;  // the upper-triangle factor is always supernodal
   impl_->cholmod.impl_->used = UsedPattern{};  // the next factorisation analyses afresh
 }
 PreconditionedGmres::~PreconditionedGmres() = default;
@@ -417,7 +442,7 @@ void PreconditionedGmres::set_preconditioner(const SparseMatrix& M, const Surrog
       return false;  // not positive definite
     }
     kind_ = Kind::symmetric_part;
-    impl_->single_active = single_precision_ && impl_->single.assign(impl_->cholmod.impl_->cholmod.factor());
+    impl_->single_active = single_precision_ && impl_->single.assign(impl_->cholmod.impl_->factor());
     return true;
   };
   if (try_symmetric_part(M)) return;
