@@ -5,6 +5,8 @@
 # the paper's case on the coarse mesh at welding currents of 5-8 kA, with the paper's
 # R30 domed faces and with flat faces (same 5.5 mm face diameter). One line per run.
 #   bash validation/plausibility/sweep.sh [extra --set options]
+# The extra options come last and win: `--set mesh.base_size=0.25mm --set
+# mesh.weld_zone.levels=2` runs the sweep on the paper's mesh (about 2 min).
 # Results and their reading: docs/MODEL.md, "Known limitations".
 set -euo pipefail
 cd "$(dirname "$0")/../.."
