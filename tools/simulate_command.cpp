@@ -5,6 +5,7 @@
 
 #include "physics/weld_simulation.hpp"
 
+#include <chrono>
 #include <cstdio>
 #include <memory>
 #include <stdexcept>
@@ -24,14 +25,23 @@ struct SimulateOptions {
 void run_simulate(const SimulateOptions& options) {
   const physics::Problem problem = physics::load_problem(options.case_file, options.overrides);
   const std::string dir = options.output_dir.empty() ? problem.output.directory : options.output_dir;
+  // The weld stage's remaining time, estimated from its mean time per step so far.
+  std::chrono::steady_clock::time_point weld_start;
   auto progress = [&](const physics::Progress& p) {
     if (options.quiet) return;
-    if (p.stage == "squeeze")
+    if (p.stage == "squeeze") {
       std::fprintf(stderr, "squeeze: seating and raising the force to %.3g kN ...\n",
                    problem.schedule.force.at(0.0) / 1e3);
-    else
-      std::fprintf(stderr, "\rweld: step %d/%d, t = %.1f ms, T_max %.0f degC, R %.1f uOhm   ", p.step, p.n_steps,
-                   p.time * 1e3, p.max_temperature, p.resistance * 1e6);
+      return;
+    }
+    const auto now = std::chrono::steady_clock::now();
+    if (p.step <= 1) weld_start = now;
+    const double elapsed = std::chrono::duration<double>(now - weld_start).count();
+    char left[40] = "";
+    if (p.step > 1)
+      std::snprintf(left, sizeof left, ", about %.0f s left", elapsed * (p.n_steps - p.step) / (p.step - 1));
+    std::fprintf(stderr, "\rweld: step %d/%d, t = %.1f ms, T_max %.0f degC, R %.1f uOhm%s   ", p.step, p.n_steps,
+                 p.time * 1e3, p.max_temperature, p.resistance * 1e6, left);
   };
   const auto result = physics::run_weld(problem, dir, progress);
   if (!options.quiet) std::fprintf(stderr, "\n");
