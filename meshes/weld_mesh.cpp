@@ -126,7 +126,7 @@ std::vector<RefinementBox> refinement_boxes(const StackGeometry& stack, const Me
 // sheet around the face edge, and a surface that ended there let the sheet pass into
 // the flank unseen, while the contact points of the edge cycled between sheet segments
 // (the Newton stall at 143 ms of design point 30 of the paper-mesh Table I study,
-// docs/MODEL.md, "Contact at the electrode's face edge"). Flank points out of contact
+// docs/MODEL_HISTORY.md, "Contact at the electrode's face edge"). Flank points out of contact
 // carry nothing.
 constexpr double flank_contact_width = 1e-3;  // m
 

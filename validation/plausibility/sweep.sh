@@ -7,7 +7,7 @@
 #   bash validation/plausibility/sweep.sh [extra --set options]
 # The extra options come last and win: `--set mesh.base_size=0.25mm --set
 # mesh.weld_zone.levels=2` runs the sweep on the paper's mesh (about 2 min).
-# Results and their reading: docs/MODEL.md, "Known limitations".
+# Results and their reading: docs/MODEL.md, "Plausibility".
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 rsw=${RSW:-build/tools/rsw}
