@@ -4,6 +4,7 @@
 // the resolved-YAML echo and the schema exports.
 #include "fem/config.hpp"
 
+#include "tests/config/test_files.hpp"
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -53,13 +54,8 @@ ConfigSchema part_schema() {
   return s;
 }
 
-// Prefixed with the test name: ctest runs the tests of this binary in parallel processes.
 std::string write_file(const std::string& name, const std::string& text) {
-  const std::string path = testing::TempDir() +
-                           testing::UnitTest::GetInstance()->current_test_info()->name() + "_" +
-                           name;
-  std::ofstream(path) << text;
-  return path;
+  return rsw::test::write_test_file(name, text);
 }
 
 // The message of the ConfigError thrown by `action`, or a test failure.

@@ -5,6 +5,7 @@
 #include "physics/problem.hpp"
 #include "physics/weld_simulation.hpp"
 
+#include "tests/config/test_files.hpp"
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -23,14 +24,7 @@ const std::string source_dir = RSW_SOURCE_DIR;
 const std::string paper_case = source_dir + "/validation/paper_case/weld.yaml";
 const std::string paper_nominal = source_dir + "/validation/paper_nominal/weld.yaml";
 
-// One file per test: ctest runs the tests of this binary in parallel processes.
-std::string write_case(const std::string& text) {
-  const std::string path = testing::TempDir() +
-                           testing::UnitTest::GetInstance()->current_test_info()->name() +
-                           "_weld_case.yaml";
-  std::ofstream(path) << text;
-  return path;
-}
+std::string write_case(const std::string& text) { return rsw::test::write_test_file("weld_case.yaml", text); }
 
 std::string read_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
