@@ -78,17 +78,24 @@ std::map<std::string, std::vector<double>> read_csv(const fs::path& path) {
   return cols;
 }
 
-// One coarse run of the paper case, shared by the tests below.
+// One coarse run of the paper case, shared by the tests below, removed when the test
+// process exits.
 const fs::path& coarse_run() {
-  static const fs::path dir = [] {
-    const fs::path d = fs::temp_directory_path() / ("rsw_weld_" + std::to_string(::getpid()));
-    fs::remove_all(d);
-    std::string out;
-    const int status = run_rsw("simulate " + paper_case + " -q -o " + d.string() + coarse, out);
-    if (status != 0) ADD_FAILURE() << out;
-    return d;
-  }();
-  return dir;
+  struct Run {
+    fs::path dir = fs::temp_directory_path() / ("rsw_weld_" + std::to_string(::getpid()));
+    Run() {
+      fs::remove_all(dir);
+      std::string out;
+      const int status = run_rsw("simulate " + paper_case + " -q -o " + dir.string() + coarse, out);
+      if (status != 0) ADD_FAILURE() << out;
+    }
+    ~Run() {
+      std::error_code ignored;
+      fs::remove_all(dir, ignored);
+    }
+  };
+  static const Run run;
+  return run.dir;
 }
 
 // The features (rsw features on its signals.csv) of a coarse signals-only run of the
