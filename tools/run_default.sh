@@ -4,7 +4,7 @@
 # ./results/paper_case/ (open fields.pvd in ParaView), with a plot of the signals.
 #
 # The case runs on the paper's mesh (0.25 mm base, 0.0625 mm in the weld zone): about
-# 1 min on one core (docs/PERFORMANCE.md). For a quick look add
+# 20 s on one core (docs/PERFORMANCE.md). For a quick look add
 # `--set mesh.base_size=0.5mm --set mesh.weld_zone.levels=1` (coarse mesh, ~4 s).
 set -euo pipefail
 cd "$(dirname "$0")/.."

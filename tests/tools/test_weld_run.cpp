@@ -79,24 +79,25 @@ std::map<std::string, std::vector<double>> read_csv(const fs::path& path) {
 }
 
 // One coarse run of the paper case, shared by the tests below, removed when the test
-// process exits.
-const fs::path& coarse_run() {
-  struct Run {
-    fs::path dir = fs::temp_directory_path() / ("rsw_weld_" + std::to_string(::getpid()));
-    Run() {
-      fs::remove_all(dir);
-      std::string out;
-      const int status = run_rsw("simulate " + paper_case + " -q -o " + dir.string() + coarse, out);
-      if (status != 0) ADD_FAILURE() << out;
-    }
-    ~Run() {
-      std::error_code ignored;
-      fs::remove_all(dir, ignored);
-    }
-  };
-  static const Run run;
-  return run.dir;
+// process exits; `output` is what rsw printed (stdout and stderr, not a terminal).
+struct CoarseRun {
+  fs::path dir = fs::temp_directory_path() / ("rsw_weld_" + std::to_string(::getpid()));
+  std::string output;
+  CoarseRun() {
+    fs::remove_all(dir);
+    const int status = run_rsw("simulate " + paper_case + " -o " + dir.string() + coarse, output);
+    if (status != 0) ADD_FAILURE() << output;
+  }
+  ~CoarseRun() {
+    std::error_code ignored;
+    fs::remove_all(dir, ignored);
+  }
+};
+const CoarseRun& coarse_weld() {
+  static const CoarseRun run;
+  return run;
 }
+const fs::path& coarse_run() { return coarse_weld().dir; }
 
 // The features (rsw features on its signals.csv) of a coarse signals-only run of the
 // paper case with the extra options `sets`, written into `dir`; `summary` receives its
@@ -132,6 +133,39 @@ TEST(WeldRun, CoarseRunMatchesStoredReference) {
       EXPECT_NEAR(got[i], values[i], tol) << name << " at row " << i
                                           << " (regenerate only with tools/regenerate_weld_reference.sh)";
   }
+}
+
+// What `rsw simulate` prints for a log file: progress in tenths of the weld steps, one
+// line each (no carriage returns), then the signals' maxima, the nugget and the energy
+// balance, each equal to what the run wrote to signals.csv and summary.json.
+TEST(WeldRun, SimulatePrintsKeyResultsAndProgressLinesForALog) {
+  const std::string& out = coarse_weld().output;
+  EXPECT_EQ(out.find('\r'), std::string::npos);
+  std::smatch m;
+  const std::regex progress(R"(weld: step \d+/\d+, )");
+  const auto progress_lines = std::distance(std::sregex_iterator(out.begin(), out.end(), progress), std::sregex_iterator());
+  EXPECT_GE(progress_lines, 10);
+  EXPECT_LE(progress_lines, 11);
+
+  const auto signals = read_csv(coarse_run() / "signals.csv");
+  const auto& R = signals.at("resistance [ohm]");
+  double r_max = 0;
+  for (double r : R)
+    if (std::isfinite(r)) r_max = std::max(r_max, r);
+  ASSERT_TRUE(std::regex_search(out, m, std::regex(R"(dynamic resistance +([0-9.]+) uOhm at ([0-9.]+) ms)"))) << out;
+  EXPECT_NEAR(std::stod(m[1]), r_max * 1e6, 5e-4 * r_max * 1e6);
+  const auto& S = signals.at("displacement [m]");
+  ASSERT_TRUE(std::regex_search(out, m, std::regex(R"(electrode displacement +([-0-9.]+) um)"))) << out;
+  EXPECT_NEAR(std::stod(m[1]), *std::max_element(S.begin(), S.end()) * 1e6, 0.05);
+
+  std::ifstream in(coarse_run() / "summary.json");
+  const auto j = nlohmann::json::parse(in);
+  ASSERT_TRUE(std::regex_search(out, m, std::regex(R"(nugget: d_n,liq ([0-9.]+) mm, h_n,liq ([0-9.]+) mm)"))) << out;
+  EXPECT_NEAR(std::stod(m[1]), j.at("nugget").at("d_n_liq").get<double>() * 1e3, 5e-4);
+  EXPECT_NEAR(std::stod(m[2]), j.at("nugget").at("h_n_liq").get<double>() * 1e3, 5e-4);
+  ASSERT_TRUE(std::regex_search(out, m, std::regex(R"(energy: electrical ([0-9.]+) J = stored ([0-9.]+) J)"))) << out;
+  EXPECT_NEAR(std::stod(m[1]), j.at("energy_J").at("electrical").get<double>(), 0.05);
+  EXPECT_NE(out.find("penetration: sheet_1 "), std::string::npos) << out;
 }
 
 TEST(WeldRun, EnergyBalanceHoldsWithinOnePercent) {
