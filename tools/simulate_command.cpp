@@ -9,10 +9,10 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <algorithm>
 #include <memory>
 #include <stdexcept>
 #include <string>
