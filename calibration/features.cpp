@@ -1,4 +1,4 @@
-// Feature extraction from weld signals; definitions in features.hpp (MODEL.md §10,
+// Feature extraction from weld signals; definitions in features.hpp (docs/STUDIES.md, "The features",
 // El Ouafi et al. 2012 for the dynamic-resistance geometry, paper §2.2 for the
 // displacement and temperature features), including which features a curve's shape
 // leaves undefined (NaN with the reason) and which input errors throw.

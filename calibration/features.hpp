@@ -1,4 +1,4 @@
-// Scalar calibration features of one weld, extracted from its signals (MODEL.md §10;
+// Scalar calibration features of one weld, extracted from its signals (docs/STUDIES.md, "The features";
 // paper §2.2–2.3). The same extractor serves simulated signals and measured signal
 // files, so simulation and experiment are compared like for like.
 //
@@ -188,11 +188,11 @@ class FeatureValues {
 // Under which condition the feature `name` is undefined for a valid signal, in general
 // terms (the list above), e.g. "the electrode displacement does not rise after the weld
 // start" for S_dot_exp; "" for features that are always defined and for names that are
-// not features of §10. For reports that see only a stored NaN, such as a study's results
+// not features of this list. For reports that see only a stored NaN, such as a study's results
 // or a calibration run; extract_features() gives the specific reason of one signal.
 std::string why_undefined(const std::string& name);
 
-// All features of §10 that `signal` supports, then the `scalars` (nugget geometry, in
+// All features of this list that `signal` supports, then the `scalars` (nugget geometry, in
 // the order given). Features that the curves' shapes leave undefined are NaN with their
 // reason in undefined(); input errors throw FeatureError or SignalError with the reason.
 FeatureValues extract_features(const Signal& signal, const FeatureSettings& settings = {},

@@ -17,7 +17,7 @@
 //   Hermite pieces. Between samples it is C¹ and reproduces cubics exactly, so peaks,
 //   steepest points, means and fitted slopes are found on the curve, not snapped to the
 //   sample grid: features then vary continuously with the data. trimmed() narrows the
-//   curve's domain (the 2 ms margins of MODEL.md §10).
+//   curve's domain (the 2 ms margins of calibration/features.hpp).
 // - read_signal_csv: measured signal files, header "time [ms], current [kA], ...",
 //   converted to SI through fem/units.hpp (UDUNITS-2).
 #pragma once

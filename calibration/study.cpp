@@ -90,7 +90,7 @@ ConfigSchema build_schema() {
            "include the prior bounds (endpoints; bounded priors only).");
 
   s.list("features").items(0, 1000).default_value("[]")
-      .doc("Features the forward model returns for each run (MODEL.md §10), in this order.");
+      .doc("Features the forward model returns for each run (docs/STUDIES.md, 'The features'), in this order.");
   s.string("features[].name").default_value("")
       .doc("Feature name, e.g. R_beta, dS_P, T_max, d_n_liq; required.");
 

@@ -16,7 +16,7 @@
 //               oat: the nominal point, then for each parameter n_levels points at the
 //               prior quantiles F⁻¹((k + 1/2)/n_levels), k = 0..n_levels − 1, with every
 //               other parameter nominal (1 + d·n_levels runs).
-//   features:   a list of feature names (MODEL.md §10), the forward model's outputs.
+//   features:   a list of feature names (docs/STUDIES.md, "The features"), the forward model's outputs.
 //   model:      the weld-case file (relative to the study file) and extra config
 //               overrides for every run.
 //   sensitivity: degree range and q-norm of the sparse PCE (calibration/pce.hpp).
@@ -58,7 +58,7 @@ struct DesignSettings {
   std::size_t n_levels = 0;        // oat: points per parameter
 };
 
-// Group and unit of the features of MODEL.md §10 ("resistance", "ohm"); group "other"
+// Group and unit of the features (docs/STUDIES.md, "The features") ("resistance", "ohm"); group "other"
 // and an empty unit for any other name.
 FeatureInfo describe_feature(const std::string& name);
 // Every feature name the weld forward model can produce, in the groups' order.

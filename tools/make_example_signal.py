@@ -3,8 +3,8 @@
 of a measured one (time [ms], current [kA], voltage [V], force [kN], displacement [mm]).
 
 It is not a measurement. It exists so that `rsw features FILE`, the signal-file reader
-and the feature extractor (MODEL.md §10) can be exercised and documented on a file that
-looks like what a welding controller's data logger writes, without shipping real data.
+and the feature extractor (docs/STUDIES.md, "The features") can be exercised and
+documented on a file that looks like what a welding controller's data logger writes, without shipping real data.
 
 The waveforms are plausible for an 8 kA / 150 ms mid-frequency DC weld of two 1.0 mm
 DP1200 sheets at 3 kN (the paper's case, validation/paper_case/weld.yaml):

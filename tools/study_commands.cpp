@@ -378,7 +378,8 @@ void add_study_commands(CLI::App& app, ForwardModelFactory model_factory) {
 
 void add_features_command(CLI::App& app) {
   auto options = std::make_shared<FeaturesOptions>();
-  CLI::App* features = app.add_subcommand("features", "Print the calibration features of a signal file (MODEL.md §10)");
+  CLI::App* features = app.add_subcommand(
+      "features", "Print the calibration features of a signal file (docs/STUDIES.md, 'The features')");
   features->add_option("file", options->signal_file, "Signal file: CSV with 'time [ms], current [kA], ...' header")
       ->required();
   features->add_option("-o,--output", options->json_file, "Also write the features as JSON (SI units) to this file");

@@ -29,7 +29,7 @@ using ForwardModelFactory =
 // once per `study run`, before the worker processes start.
 void add_study_commands(CLI::App& app, ForwardModelFactory model_factory);
 
-// Adds `features FILE [-o JSON]`: the features of MODEL.md §10 of a signal file.
+// Adds `features FILE [-o JSON]`: the features (docs/STUDIES.md, "The features") of a signal file.
 void add_features_command(CLI::App& app);
 
 }  // namespace rsw::tools
