@@ -29,12 +29,16 @@ const std::string coarse_mesh = " --set mesh.base_size=0.5mm --set mesh.weld_zon
 const std::string coarse = coarse_mesh + " --set output.interval=10ms";
 const std::string coarse_signals_only = coarse_mesh + " --set output.fields=false";  // no field files
 
-int run_rsw(const std::string& args, std::string& output) {
-  const std::string cmd = std::string(RSW_BINARY) + " " + args + " 2>&1";
+int run_command(const std::string& command, std::string& output) {
+  const std::string cmd = command + " 2>&1";
   std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
   std::array<char, 4096> buf;
   while (fgets(buf.data(), buf.size(), pipe.get())) output += buf.data();
   return WEXITSTATUS(pclose(pipe.release()));
+}
+
+int run_rsw(const std::string& args, std::string& output) {
+  return run_command(std::string(RSW_BINARY) + " " + args, output);
 }
 
 // The --set arguments of one design point of the Table I studies: the six parameters
@@ -166,6 +170,30 @@ TEST(WeldRun, SimulatePrintsKeyResultsAndProgressLinesForALog) {
   ASSERT_TRUE(std::regex_search(out, m, std::regex(R"(energy: electrical ([0-9.]+) J = stored ([0-9.]+) J)"))) << out;
   EXPECT_NEAR(std::stod(m[1]), j.at("energy_J").at("electrical").get<double>(), 0.05);
   EXPECT_NE(out.find("penetration: sheet_1 "), std::string::npos) << out;
+}
+
+// tools/plot_weld.py draws a run, with a measured signal file over its resistance and
+// displacement; a file it cannot read is an error naming it.
+TEST(WeldRun, PlotScriptOverlaysAMeasuredSignalFileAndNamesOneItCannotRead) {
+  std::string check;
+  if (run_command("/usr/bin/python3 -c 'import matplotlib, h5py, numpy'", check) != 0) {
+    GTEST_SKIP() << "/usr/bin/python3 lacks matplotlib, h5py or numpy (run tools/setup.sh): " << check;
+  }
+  const std::string source = RSW_SOURCE_DIR;
+  const std::string script = "/usr/bin/python3 " + source + "/tools/plot_weld.py " + coarse_run().string();
+  const fs::path png = coarse_run() / "overlay.png";
+  std::string out;
+  ASSERT_EQ(run_command(script + " -o " + png.string() + " --measured " + source +
+                            "/validation/signals/measured_example.csv",
+                        out),
+            0)
+      << out;
+  EXPECT_NE(out.find("overlaid " + source + "/validation/signals/measured_example.csv"), std::string::npos) << out;
+  ASSERT_TRUE(fs::exists(png)) << out;
+  EXPECT_GT(fs::file_size(png), 10000u);
+  out.clear();
+  EXPECT_NE(run_command(script + " -o " + png.string() + " --measured " + source + "/README.md", out), 0);
+  EXPECT_NE(out.find("plot_weld: " + source + "/README.md: "), std::string::npos) << out;
 }
 
 TEST(WeldRun, EnergyBalanceHoldsWithinOnePercent) {
