@@ -11,6 +11,9 @@
 //   diameter   2 · max r over the region                 (d_n, m)
 //   height     max z − min z over the region             (h_n, m)
 //   penetration into sheet k: the region's z-extent inside sheet k / thickness of k
+//              on the axis; above 1 where the region spans the sheet off the axis,
+//              where the indented sheet is thicker than on it (a nugget through
+//              the sheet)
 //   t_unmolt   the smaller distance, on the axis, from the region to the outer
 //              surfaces of the top and bottom sheets (m)
 // Positions are those of the deformed configuration passed in.
