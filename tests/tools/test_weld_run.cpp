@@ -139,6 +139,43 @@ TEST(WeldRun, CoarseRunMatchesStoredReference) {
   }
 }
 
+// Every signal of a coarse run (one thread, signals only), read from results.h5 at full
+// precision, equals the stored reference bit for bit. Pins refactorings that must not
+// change what the weld computes; a deliberate change regenerates the reference with
+// tools/regenerate_weld_reference.sh and says why in its commit.
+TEST(WeldRun, CoarseRunSignalsAreBitIdenticalToTheStoredReference) {
+  const fs::path dir = fs::temp_directory_path() / ("rsw_weld_exact_" + std::to_string(::getpid()));
+  std::string out;
+  ASSERT_EQ(run_rsw("--threads 1 simulate " + paper_case + " -q -o " + dir.string() + coarse_signals_only, out), 0)
+      << out;
+  std::ifstream in(std::string(RSW_SOURCE_DIR) + "/tests/data/weld_coarse_signals_exact.csv");
+  ASSERT_TRUE(in) << "missing tests/data/weld_coarse_signals_exact.csv (tools/regenerate_weld_reference.sh)";
+  std::string line;
+  std::vector<std::string> names;
+  std::vector<std::vector<double>> columns;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::stringstream ss(line);
+    std::string cell;
+    if (names.empty()) {
+      while (std::getline(ss, cell, ',')) names.push_back(cell);
+      columns.resize(names.size());
+      continue;
+    }
+    for (std::size_t c = 0; std::getline(ss, cell, ','); ++c) columns.at(c).push_back(std::strtod(cell.c_str(), nullptr));
+  }
+  const rsw::fem::Hdf5File h5(dir / "results.h5", rsw::fem::Hdf5Mode::read);
+  EXPECT_EQ(h5.list("/signals").size(), names.size()) << "the signal columns differ from the reference's";
+  for (std::size_t c = 0; c < names.size(); ++c) {
+    const std::vector<double> got = h5.read_doubles("/signals/" + names[c]);
+    ASSERT_EQ(got.size(), columns[c].size()) << names[c];
+    for (std::size_t i = 0; i < got.size(); ++i)
+      if (!(std::isnan(got[i]) && std::isnan(columns[c][i])))
+        ASSERT_EQ(got[i], columns[c][i]) << names[c] << " at row " << i << ": differs in the bits";
+  }
+  fs::remove_all(dir);
+}
+
 // What `rsw simulate` prints for a log file: progress in tenths of the weld steps, one
 // line each (no carriage returns), then the signals' maxima, the nugget and the energy
 // balance, each equal to what the run wrote to signals.csv and summary.json.

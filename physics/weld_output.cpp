@@ -1,0 +1,201 @@
+// The weld run's output files; see weld_output.hpp.
+#include "physics/weld_output.hpp"
+
+#include "fem/hdf5_file.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <limits>
+
+#ifndef RSW_VERSION
+#define RSW_VERSION "unknown"
+#endif
+
+namespace rsw::physics {
+
+namespace fs = std::filesystem;
+
+WeldFieldWriter::WeldFieldWriter(const fs::path& pvd, double field_interval, double end_time)
+    : series_(pvd),
+      field_interval_(field_interval),
+      end_time_(end_time),
+      last_written_(-std::numeric_limits<double>::infinity()) {}
+
+void WeldFieldWriter::write_if_due(double t, const fem::Mesh& mesh, const Mechanics& mech, const Thermal& thermal,
+                                   const Electrical& electrical, bool have_electrical,
+                                   const std::vector<double>& peak) {
+  if (t < last_written_ + field_interval_ - 1e-9 && t < end_time_ - 1e-12) return;
+  last_written_ = t;
+  const Eigen::VectorXd& T = thermal.committed_temperature();
+  fem::FieldSet fields;
+  const Eigen::VectorXd u = mech.displacement();
+  fields.add_point_vector("displacement", std::vector<double>(u.data(), u.data() + u.size()));
+  fields.add_point_scalar("temperature", std::vector<double>(T.data(), T.data() + T.size()));
+  fields.add_point_scalar("peak_temperature", peak);
+  const Eigen::VectorXd fl = thermal.liquid_fraction();
+  fields.add_point_scalar("liquid_fraction", std::vector<double>(fl.data(), fl.data() + fl.size()));
+  if (have_electrical) {
+    const Eigen::VectorXd& phi = electrical.solution().potential;
+    fields.add_point_scalar("potential", std::vector<double>(phi.data(), phi.data() + phi.size()));
+    fields.add_cell_scalar("joule_heat", electrical.cell_joule_heat());
+    std::vector<double> j;
+    for (const auto& v : electrical.cell_current_density()) {
+      j.push_back(v.x());
+      j.push_back(v.y());
+    }
+    fields.add_cell_vector("current_density", j);
+  } else {
+    fields.add_point_scalar("potential", std::vector<double>(mesh.n_nodes(), 0.0));
+    fields.add_cell_scalar("joule_heat", std::vector<double>(mesh.n_cells(), 0.0));
+    fields.add_cell_vector("current_density", std::vector<double>(2 * mesh.n_cells(), 0.0));
+  }
+  fields.add_cell_scalar("von_mises_stress", mech.von_mises());
+  fields.add_cell_scalar("equivalent_plastic_strain", mech.equivalent_plastic_strain());
+  const auto& pairings = mech.pairings();
+  const auto& htc = thermal.interface_conductance();
+  for (std::size_t p = 0; p < pairings.size(); ++p) {
+    const auto pressure = mech.contact_pressure(static_cast<int>(p));
+    const int n_g = pairings[p].n_gauss();
+    const int n_f = pairings[p].n_slave_faces();
+    std::vector<double> face_p(n_f, 0.0), face_g(n_f, 0.0), face_he(n_f, 0.0), face_htc(n_f, 0.0);
+    for (int f = 0; f < n_f; ++f)
+      for (int k = 0; k < n_g; ++k) {
+        const int i = f * n_g + k;
+        const auto& pt = pairings[p].points()[i];
+        face_p[f] += pressure[i] / n_g;
+        face_g[f] += (pt.paired ? pt.gap : std::nan("")) / n_g;
+        if (have_electrical && p < electrical.solution().interface_conductance.size())
+          face_he[f] += electrical.solution().interface_conductance[p][i] / n_g;
+        if (p < htc.size() && i < static_cast<int>(htc[p].size())) face_htc[f] += htc[p][i] / n_g;
+      }
+    const std::string& b = pairings[p].slave_boundary();
+    fields.add_face_scalar("contact_pressure", b, face_p);
+    fields.add_face_scalar("contact_gap", b, face_g);
+    fields.add_face_scalar("electrical_conductance", b, face_he);
+    fields.add_face_scalar("thermal_conductance", b, face_htc);
+  }
+  series_.write_step(t, mesh, fields);
+}
+
+void ContactProfiles::add(double t, const std::vector<InterfaceState>& states) {
+  if (names.empty())
+    for (const auto& st : states) names.push_back(st.name);
+  radius.resize(states.size());
+  pressure.resize(states.size());
+  for (std::size_t i = 0; i < states.size(); ++i) {
+    radius[i].push_back(states[i].radius);
+    pressure[i].push_back(states[i].pressure);
+  }
+  times.push_back(t);
+}
+
+namespace {
+fem::RowMajorMatrix to_matrix(const std::vector<std::vector<double>>& rows) {
+  fem::RowMajorMatrix m;
+  m.n_rows = rows.size();
+  m.n_cols = rows.empty() ? 0 : rows.front().size();
+  for (const auto& row : rows) m.values.insert(m.values.end(), row.begin(), row.end());
+  return m;
+}
+}  // namespace
+
+void write_results_h5(const fs::path& file, const Problem& problem, const RunResult& result,
+                      const SqueezeResult& squeeze, const ContactProfiles& profiles,
+                      std::chrono::steady_clock::time_point t_start) {
+  const Signals& sig = result.signals;
+  fem::Hdf5File h5(file, fem::Hdf5Mode::truncate);
+  for (std::size_t c = 0; c < sig.names.size(); ++c) {
+    h5.write("/signals/" + sig.names[c], sig.columns[c]);
+    h5.set_attribute("/signals/" + sig.names[c], "unit", sig.units[c]);
+  }
+  std::vector<double> sq_force, sq_disp, sq_iter;
+  for (const auto& s : squeeze.steps) {
+    sq_force.push_back(s.force);
+    sq_disp.push_back(s.displacement);
+    sq_iter.push_back(s.iterations);
+  }
+  h5.write("/squeeze/force", sq_force);
+  h5.set_attribute("/squeeze/force", "unit", std::string("N"));
+  h5.write("/squeeze/displacement", sq_disp);
+  h5.set_attribute("/squeeze/displacement", "unit", std::string("m"));
+  h5.write("/squeeze/newton_iterations", sq_iter);
+  h5.write("/contact/output_times", profiles.times);
+  for (std::size_t i = 0; i < profiles.names.size(); ++i) {
+    const std::string g = "/contact/" + profiles.names[i];
+    h5.write(g + "/radius", to_matrix(profiles.radius[i]));
+    h5.set_attribute(g + "/radius", "unit", std::string("m"));
+    h5.write(g + "/pressure", to_matrix(profiles.pressure[i]));
+    h5.set_attribute(g + "/pressure", "unit", std::string("Pa"));
+  }
+  for (const auto& [name, value] : result.nugget) {
+    h5.write("/nugget/" + name, std::vector<double>{value});
+    h5.set_attribute("/nugget/" + name, "unit", std::string(name.rfind("penetration", 0) == 0 ? "1" : "m"));
+  }
+  for (const auto& [name, value] : result.energy) {
+    h5.write("/energy/" + name, std::vector<double>{value});
+    h5.set_attribute("/energy/" + name, "unit", std::string(name == "nugget_fraction" ? "1" : "J"));
+  }
+  h5.write_string("/run/config", problem.resolved_config);
+  h5.set_attribute("/run", "version", std::string(RSW_VERSION));
+  h5.set_attribute("/run", "case", problem.name);
+  h5.set_attribute("/run", "wall_time", std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count());
+  h5.set_attribute("/run", "squeeze_indentation", result.squeeze_indentation);
+  h5.set_attribute("/run", "electrode_melting_time", result.electrode_melting_time);
+  h5.set_attribute("/run", "worst_cell_scaled_jacobian", result.worst_cell.scaled_jacobian);
+  h5.set_attribute("/run", "worst_cell_time", result.worst_cell.time);
+  h5.set_attribute("/run", "worst_cell_body", result.worst_cell.body);
+  h5.set_attribute("/run", "worst_cell_r", result.worst_cell.centre.x());
+  h5.set_attribute("/run", "worst_cell_z", result.worst_cell.centre.y());
+  std::string warnings;
+  for (const auto& w : result.warnings) warnings += (warnings.empty() ? "" : "\n") + w;
+  h5.set_attribute("/run", "warnings", warnings);
+}
+
+void write_signals_csv(const fs::path& file, const Signals& sig) {
+  std::ofstream csv(file);
+  for (std::size_t c = 0; c < sig.names.size(); ++c) csv << (c ? "," : "") << sig.names[c] << " [" << sig.units[c] << "]";
+  csv << "\n";
+  csv.precision(10);
+  for (std::size_t r = 0; r < sig.n_rows(); ++r) {
+    for (std::size_t c = 0; c < sig.names.size(); ++c) csv << (c ? "," : "") << sig.columns[c][r];
+    csv << "\n";
+  }
+}
+
+void write_summary_json(const fs::path& file, const Problem& problem, const RunResult& result) {
+  nlohmann::json j;
+  j["status"] = "success";
+  for (const auto& [part, seconds] : result.timing) j["timing_s"][part] = seconds;
+  j["version"] = RSW_VERSION;
+  j["case"] = problem.name;
+  j["wall_time_s"] = result.wall_time;
+  j["weld_steps"] = result.n_steps;
+  j["newton_iterations"] = result.n_newton_iterations;
+  j["coupling_iterations"] = result.n_coupling_iterations;
+  j["mechanics_substep_splits"] = result.n_mechanics_substepped;
+  j["mechanics_loose_substeps"] = result.n_mechanics_loose;
+  j["coupling_retries"] = result.n_coupling_retries;
+  for (const auto& [name, count] : result.mechanics_linear_algebra) j["mechanics_linear_algebra"][name] = count;
+  for (const auto& [name, count] : result.thermal_linear_algebra) j["thermal_linear_algebra"][name] = count;
+  for (const auto& [name, value] : result.nugget) j["nugget"][name] = value;
+  for (const auto& [name, value] : result.energy) j["energy_J"][name] = value;
+  j["dynamic_resistance_peak_ohm"] = result.dynamic_resistance_peak;
+  j["squeeze"]["electrode_displacement_m"] = result.squeeze_displacement;
+  j["squeeze"]["indentation_m"] = result.squeeze_indentation;
+  for (const auto& [name, r] : result.squeeze_contact_radius) j["squeeze"]["contact_radius_m"][name] = r;
+  for (const auto& [name, p] : result.squeeze_peak_pressure) j["squeeze"]["peak_pressure_Pa"][name] = p;
+  j["warnings"] = result.warnings;
+  if (!std::isnan(result.electrode_melting_time)) j["electrode_melting_time_s"] = result.electrode_melting_time;
+  j["worst_cell"] = {{"scaled_jacobian", result.worst_cell.scaled_jacobian},
+                     {"time_s", result.worst_cell.time},
+                     {"cell", result.worst_cell.cell},
+                     {"body", result.worst_cell.body},
+                     {"r_m", result.worst_cell.centre.x()},
+                     {"z_m", result.worst_cell.centre.y()}};
+  j["config_yaml"] = problem.resolved_config;
+  std::ofstream(file) << j.dump(2) << "\n";
+}
+
+}  // namespace rsw::physics
