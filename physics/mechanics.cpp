@@ -2,6 +2,7 @@
 // friction, Newton with line search; see mechanics.hpp.
 #include "physics/mechanics.hpp"
 
+#include "contact/mechanical_contact.hpp"
 #include "fem/fe_values.hpp"
 
 #include <algorithm>
@@ -25,15 +26,9 @@ constexpr double sqrt_three_halves = 1.22474487139158904910;
 
 enum class Control { force, displacement };
 
-// C¹ penalty law: pressure and its slope -dp/dg for gap g (see mechanics.hpp).
-struct PenaltyPressure {
-  double pressure, stiffness;
-};
-PenaltyPressure penalty_pressure(double gap, double eps_n, double delta) {
-  if (gap >= 0) return {0.0, 0.0};
-  if (gap > -delta) return {eps_n * gap * gap / (2 * delta), -eps_n * gap / delta};
-  return {eps_n * (-gap - 0.5 * delta), eps_n};
-}
+using Vector8 = Eigen::Matrix<double, 8, 1>;
+using Matrix8 = Eigen::Matrix<double, 8, 8>;
+using contact::penalty_pressure;
 }  // namespace
 
 struct Mechanics::Impl {
@@ -141,7 +136,15 @@ struct Mechanics::Impl {
       throw std::invalid_argument("Mechanics: one material per body expected");
     for (int e = 0; e < mesh.n_cells(); ++e) cell_material.push_back(body_materials[mesh.cell_body[e]]);
 
-    // Bodies without a support of their own get the seating foundation κ = k / V.
+    setup_foundation(settings);
+    setup_constraints(settings);
+    setup_contact_passes(settings, body_materials, T0);
+    setup_assemblers();
+    allocate_state(T0);
+  }
+
+  // Bodies without a support of their own get the seating foundation κ = k / V.
+  void setup_foundation(const MechanicsSettings& s) {
     std::vector<char> supported(mesh.n_bodies(), 0);
     for (const auto* b : {&s.fixed_boundary, &s.loaded_boundary})
       for (int n : mesh.boundary_nodes(*b)) supported[mesh.node_body[n]] = 1;
@@ -154,7 +157,11 @@ struct Mechanics::Impl {
     foundation.assign(mesh.n_bodies(), 0.0);
     for (int b = 0; b < mesh.n_bodies(); ++b)
       if (!supported[b]) foundation[b] = s.seating_stiffness / volume[b];
+  }
 
+  // Hanging nodes, the axis, the fixed and loaded end faces, the rigid end face (w);
+  // under displacement control w is prescribed too.
+  void setup_constraints(const MechanicsSettings& s) {
     for (fem::Constraints* c : {&force_constraints, &displacement_constraints}) {
       c->add_hanging_nodes(mesh, dofs);
       for (const auto& [name, faces] : mesh.boundaries)
@@ -171,11 +178,14 @@ struct Mechanics::Impl {
     displacement_constraints.constrain(w_dof, 0.0);
     force_constraints.close();
     displacement_constraints.close();
+  }
 
-    std::vector<std::vector<int>> dof_groups;
+  // One contact pass per mesh interface, and a mirrored pass for each two-pass
+  // interface, with the normal penalty ε_N and the area weight of each pass.
+  void setup_contact_passes(const MechanicsSettings& s, const std::vector<const materials::Material*>& body_materials,
+                            double T0) {
     auto two_pass = [&](const std::string& name) {
-      return std::find(s.two_pass_interfaces.begin(), s.two_pass_interfaces.end(), name) !=
-             s.two_pass_interfaces.end();
+      return std::find(s.two_pass_interfaces.begin(), s.two_pass_interfaces.end(), name) != s.two_pass_interfaces.end();
     };
     for (const auto& name : s.two_pass_interfaces)
       if (!mesh.interfaces.count(name)) throw std::out_of_range("two-pass contact: unknown interface '" + name + "'");
@@ -206,9 +216,8 @@ struct Mechanics::Impl {
       const auto& primary = pairings[p].points();
       std::vector<int> order(primary.size());
       std::iota(order.begin(), order.end(), 0);
-      std::sort(order.begin(), order.end(), [&](int a, int b) {
-        return primary[a].reference_position.x() < primary[b].reference_position.x();
-      });
+      std::sort(order.begin(), order.end(),
+                [&](int a, int b) { return primary[a].reference_position.x() < primary[b].reference_position.x(); });
       std::vector<std::pair<std::array<int, 2>, double>> source;
       for (const auto& pt : mirrors.back().points()) {
         const double r = pt.reference_position.x();
@@ -222,6 +231,12 @@ struct Mechanics::Impl {
       }
       mirror_source.push_back(std::move(source));
     }
+  }
+
+  // One coupling group per slave face of every pass, the friction and tie history of
+  // its points, and the assemblers of both controls.
+  void setup_assemblers() {
+    std::vector<std::vector<int>> dof_groups;
     for (int q = 0; q < n_passes(); ++q) {
       const auto& pairing = pass(q);
       for (int f = 0; f < pairing.n_slave_faces(); ++f) {
@@ -249,7 +264,10 @@ struct Mechanics::Impl {
     // so that it is applied in single precision (fem/linear_solver.hpp).
     force_gmres.set_supernodal(true);
     displacement_gmres.set_supernodal(true);
+  }
 
+  // Per-cell caches and per-point state (strain, J2 state, stresses), and the fields.
+  void allocate_state(double T0) {
     const std::size_t n_points = static_cast<std::size_t>(mesh.n_cells()) * n_q;
     point_cache.assign(n_points, PointCache{});
     geometry_stamp.assign(mesh.n_cells(), 0);
@@ -263,6 +281,7 @@ struct Mechanics::Impl {
     linear_reach.assign(mesh.n_cells(), -1.0);
     linear_stamp.assign(mesh.n_cells(), 0);
     linear_stale.assign(mesh.n_cells(), 0);
+    fem::CellValues cv(settings.n_gauss);
     cv.reinit(mesh, 0);
     for (int q = 0; q < n_q; ++q) shape.push_back({cv.N(q, 0), cv.N(q, 1), cv.N(q, 2), cv.N(q, 3)});
     strain.assign(n_points, Vector4::Zero());
@@ -527,35 +546,37 @@ struct Mechanics::Impl {
     }
   }
 
-  // Contact, friction and ties at the points of one slave face. Each point couples
-  // four nodes (two slave, two master): its terms are formed on those 8 dofs and
-  // added into the face's coupling system at their local positions.
-  void group_kernel(int g, fem::LocalSystem& local) {
-    using Vector8 = Eigen::Matrix<double, 8, 1>;
-    using Matrix8 = Eigen::Matrix<double, 8, 8>;
-    const auto [p, f] = groups[g];
-    const auto& pairing = pass(p);
-    const double eps_n = normal_penalty[p];
-    const double weight = area_weight[p];
-    const double eps_t = settings.tangential_penalty_ratio * eps_n;
-    const double mu = settings.friction_coefficient;
-    // Local dof of entry i of an 8-vector over (slave 0, slave 1, master 0, master 1).
-    std::array<int, 4> node_of{};
-    auto add = [&](const Vector8& v, const Matrix8& m) {
-      for (int i = 0; i < 8; ++i) {
-        const int r = 2 * node_of[i / 2] + i % 2;
-        local.vector[r] += v[i];
-        for (int j = 0; j < 8; ++j) local.matrix(r, 2 * node_of[j / 2] + j % 2) += m(i, j);
-      }
-    };
-    auto locate = [&](const std::array<int, 2>& slave, const std::array<int, 2>& master) {
+  // The 8 dofs of one contact point, (slave 0, slave 1, master 0, master 1) × (r, z),
+  // located in the coupling system of its slave face.
+  struct PointDofs {
+    std::array<int, 4> node_of{};  // local node of each of the four nodes
+    // False if a node lies outside the face's coupling nodes.
+    bool locate(const contact::InterfacePairing& pairing, int f, const std::array<int, 2>& slave,
+                const std::array<int, 2>& master) {
       for (int s = 0; s < 2; ++s) {
         node_of[s] = pairing.local_index(f, slave[s]);
         node_of[2 + s] = pairing.local_index(f, master[s]);
       }
       return std::all_of(node_of.begin(), node_of.end(), [](int i) { return i >= 0; });
-    };
-    auto node_increment = [&](int node) { return Eigen::Vector2d(increment[2 * node], increment[2 * node + 1]); };
+    }
+    void add(fem::LocalSystem& local, const Vector8& v, const Matrix8& m) const {
+      for (int i = 0; i < 8; ++i) {
+        const int r = 2 * node_of[i / 2] + i % 2;
+        local.vector[r] += v[i];
+        for (int j = 0; j < 8; ++j) local.matrix(r, 2 * node_of[j / 2] + j % 2) += m(i, j);
+      }
+    }
+  };
+
+  Eigen::Vector2d node_increment(int node) const { return Eigen::Vector2d(increment[2 * node], increment[2 * node + 1]); }
+
+  // Contact, friction and ties at the points of one slave face. Each point couples
+  // four nodes (two slave, two master): its terms are formed on those 8 dofs and
+  // added into the face's coupling system at their local positions.
+  void group_kernel(int g, fem::LocalSystem& local) {
+    const auto [p, f] = groups[g];
+    const auto& pairing = pass(p);
+    PointDofs point_dofs;
     for (int k = 0; k < pairing.n_gauss(); ++k) {
       const int idx = f * pairing.n_gauss() + k;
       const auto& pt = pairing.points()[idx];
@@ -564,108 +585,119 @@ struct Mechanics::Impl {
       if (tie.on && friction_coupling_only) {
         if (tie.degree >= 1) continue;
       } else if (tie.on) {
-        // d = x_s − x_m at fixed weights: linear, B maps the 8 dofs to d.
-        if (!locate(pt.slave_nodes, tie.master_nodes)) {
+        if (!point_dofs.locate(pairing, f, pt.slave_nodes, tie.master_nodes)) {
           pairing_within = false;
           continue;
         }
-        Eigen::Matrix<double, 2, 8> B;
-        for (int s = 0; s < 2; ++s) {
-          B.block<2, 2>(0, 2 * s) = pt.slave_weights[s] * Eigen::Matrix2d::Identity();
-          B.block<2, 2>(0, 4 + 2 * s) = -tie.master_weights[s] * Eigen::Matrix2d::Identity();
-        }
-        Eigen::Vector2d d = pt.position;
-        for (int s = 0; s < 2; ++s)
-          d -= tie.master_weights[s] * (current.nodes[tie.master_nodes[s]] + node_increment(tie.master_nodes[s]));
-        // On the slave side: ε_N (e·t_b) t_b − T n_b, with ∂e/∂u = −β B and
-        // ∂T/∂(e·n_b) = −k (k = −dp/dg ≥ 0 of the penalty law).
-        const double beta = tie.degree;
-        const Eigen::Vector2d e = tie.offset + beta * (tie.relative - d);
-        tie_trial[p][idx] = {e, d};
-        const auto [tension, k_tension] = penalty_pressure(e.dot(tie.normal), eps_n, settings.contact_smoothing);
-        const Eigen::Vector2d traction = eps_n * e.dot(tie.tangent) * tie.tangent - tension * tie.normal;
-        const Eigen::Matrix2d stiffness =
-            eps_n * tie.tangent * tie.tangent.transpose() + k_tension * tie.normal * tie.normal.transpose();
-        const double A_tie = weight * pt.reference_area;
-        add(A_tie * B.transpose() * traction, beta * A_tie * B.transpose() * stiffness * B);
+        tie_point(p, idx, point_dofs, local);
       }
       // Friction carries the share 1 − β of a partly bonded point; the contact pressure
       // acts whole, bonded or not (the tie resists opening only).
       const double share = tie.on ? 1 - tie.degree : 1.0;
       if (!pt.paired || pt.gap >= 0) continue;
-      if (!locate(pt.slave_nodes, pt.master_nodes)) {
+      if (!point_dofs.locate(pairing, f, pt.slave_nodes, pt.master_nodes)) {
         pairing_within = false;
         continue;
       }
-      // Nv, Tv: the gap and slip operators (g' = Nvᵀ u', slip' = Tvᵀ u' at fixed geometry).
-      Vector8 Nv, Tv, du;
-      for (int s = 0; s < 2; ++s) {
-        Nv.segment<2>(2 * s) = pt.slave_weights[s] * pt.normal;
-        Tv.segment<2>(2 * s) = pt.slave_weights[s] * pt.tangent;
-        Nv.segment<2>(4 + 2 * s) = -pt.master_weights[s] * pt.normal;
-        Tv.segment<2>(4 + 2 * s) = -pt.master_weights[s] * pt.tangent;
-        du.segment<2>(2 * s) = node_increment(pt.slave_nodes[s]);
-        du.segment<2>(4 + 2 * s) = node_increment(pt.master_nodes[s]);
-      }
-      // Tractions act on the undeformed area: the surface stretch is small, and no area
-      // derivative enters the tangent.
-      const double A = weight * pt.reference_area;
-      const auto [pressure, k_n] = penalty_pressure(pt.gap, eps_n, settings.contact_smoothing);
-      Vector8 force = pressure * A * Nv;                        // contact force on both sides
-      Matrix8 stiffness = k_n * A * Nv * Nv.transpose();        // -∂f/∂u
-      Vector8 friction_force = Vector8::Zero();                 // its friction part
-      Matrix8 friction_stiffness = Matrix8::Zero();
-      // Geometric terms: the normal n, the tangent t and the master weights (1 − η, η)
-      // move with the master face e = x_2 − x_1 (length L) and with the projection η:
-      //   δn = t (n·δe)/L,  δt = −n (n·δe)/L,  δη = −(Tvᵀ δu + g (n·δe)/L)/L,
-      // with n·δe = −Dvᵀ δu, Dv = (0, 0, n, −n), Dt = (0, 0, t, −t). Hence
-      //   δNv = −(Tv Dvᵀ + Dv Tvᵀ + (g/L) Dv Dvᵀ) δu / L,
-      //   δTv = (Nv Dvᵀ − Dt Tvᵀ − (g/L) Dt Dvᵀ) δu / L.
-      // Where the closest point is a master node shared by two faces (nodal normal)
-      // these terms do not apply; there the slave point lies within |g| of the node and
-      // the terms they would replace are of order |g|/L.
-      const bool geometric = !pt.node_normal;
-      Vector8 Dv = Vector8::Zero(), Dt = Vector8::Zero();
-      double L = 1, gL = 0;
-      if (geometric) {
-        L = ((current.nodes[pt.master_nodes[1]] + node_increment(pt.master_nodes[1])) -
-             (current.nodes[pt.master_nodes[0]] + node_increment(pt.master_nodes[0])))
-                .norm();
-        gL = pt.gap / L;
-        Dv.segment<2>(4) = pt.normal;
-        Dv.segment<2>(6) = -pt.normal;
-        Dt.segment<2>(4) = pt.tangent;
-        Dt.segment<2>(6) = -pt.tangent;
-        stiffness += (pressure * A / L) * (Tv * Dv.transpose() + Dv * Tv.transpose() + gL * Dv * Dv.transpose());
-      }
-      if (mu > 0 && pressure > 0) {
-        // Regularised Coulomb friction: τ = μ p tanh(τ_trial / (μ p)), τ_trial = τ_n + ε_T Δs.
-        // Linear (stick, stiffness ε_T) for small τ_trial, saturating smoothly at |τ| = μ p.
-        const double slip = Tv.dot(du);  // tangential slip increment
-        const double tau_trial = tau[p][idx] + eps_t * slip;
-        const double limit = mu * pressure;
-        const double u = tau_trial / limit;
-        const double th = std::tanh(u), sech2 = 1 - th * th;
-        const double tau_value = limit * th;
-        const double dtau_dtrial = sech2;              // ∂τ/∂τ_trial
-        const double dtau_dp = mu * (th - u * sech2);  // ∂τ/∂p
-        if (friction_coupling_only) {
-          add(Vector8::Zero(), -share * dtau_dp * k_n * A * Tv * Nv.transpose());
-          continue;
-        }
-        trial_tau[p][idx] = tau_value;
-        friction_force = -tau_value * A * Tv;  // friction opposes the slip
-        // ∂slip/∂u = Tvᵀ + duᵀ ∂Tv/∂u; ∂p/∂u = −k_n Nvᵀ.
-        Vector8 dslip = Tv;
-        if (geometric) dslip += (du.dot(Nv) * Dv - du.dot(Dt) * (Tv + gL * Dv)) / L;
-        friction_stiffness = dtau_dtrial * eps_t * A * Tv * dslip.transpose();
-        friction_stiffness -= dtau_dp * k_n * A * Tv * Nv.transpose();
-        if (geometric)
-          friction_stiffness +=
-              (tau_value * A / L) * (Nv * Dv.transpose() - Dt * Tv.transpose() - gL * Dt * Dv.transpose());
-      }
-      if (!friction_coupling_only) add(force + share * friction_force, stiffness + share * friction_stiffness);
+      contact_point(p, idx, share, point_dofs, local);
     }
+  }
+
+  // The tie of a bonded point of pass p: d = x_s − x_m at fixed weights is linear, B
+  // maps the 8 dofs to d.
+  void tie_point(int p, int idx, const PointDofs& point_dofs, fem::LocalSystem& local) {
+    const auto& pt = pass(p).points()[idx];
+    const Tie& tie = ties[p][idx];
+    const double eps_n = normal_penalty[p];
+    Eigen::Matrix<double, 2, 8> B;
+    for (int s = 0; s < 2; ++s) {
+      B.block<2, 2>(0, 2 * s) = pt.slave_weights[s] * Eigen::Matrix2d::Identity();
+      B.block<2, 2>(0, 4 + 2 * s) = -tie.master_weights[s] * Eigen::Matrix2d::Identity();
+    }
+    Eigen::Vector2d d = pt.position;
+    for (int s = 0; s < 2; ++s)
+      d -= tie.master_weights[s] * (current.nodes[tie.master_nodes[s]] + node_increment(tie.master_nodes[s]));
+    // On the slave side: ε_N (e·t_b) t_b − T n_b, with ∂e/∂u = −β B and
+    // ∂T/∂(e·n_b) = −k (k = −dp/dg ≥ 0 of the penalty law).
+    const double beta = tie.degree;
+    const Eigen::Vector2d e = tie.offset + beta * (tie.relative - d);
+    tie_trial[p][idx] = {e, d};
+    const auto [tension, k_tension] = contact::penalty_pressure(e.dot(tie.normal), eps_n, settings.contact_smoothing);
+    const Eigen::Vector2d traction = eps_n * e.dot(tie.tangent) * tie.tangent - tension * tie.normal;
+    const Eigen::Matrix2d stiffness =
+        eps_n * tie.tangent * tie.tangent.transpose() + k_tension * tie.normal * tie.normal.transpose();
+    const double A_tie = area_weight[p] * pt.reference_area;
+    point_dofs.add(local, A_tie * B.transpose() * traction, beta * A_tie * B.transpose() * stiffness * B);
+  }
+
+  // Normal contact and friction (the share `share` of it) of a penetrating point of pass p.
+  void contact_point(int p, int idx, double share, const PointDofs& point_dofs, fem::LocalSystem& local) {
+    const auto& pt = pass(p).points()[idx];
+    const double eps_n = normal_penalty[p];
+    const double eps_t = settings.tangential_penalty_ratio * eps_n;
+    const double mu = settings.friction_coefficient;
+    // Nv, Tv: the gap and slip operators (g' = Nvᵀ u', slip' = Tvᵀ u' at fixed geometry).
+    Vector8 Nv, Tv, du;
+    for (int s = 0; s < 2; ++s) {
+      Nv.segment<2>(2 * s) = pt.slave_weights[s] * pt.normal;
+      Tv.segment<2>(2 * s) = pt.slave_weights[s] * pt.tangent;
+      Nv.segment<2>(4 + 2 * s) = -pt.master_weights[s] * pt.normal;
+      Tv.segment<2>(4 + 2 * s) = -pt.master_weights[s] * pt.tangent;
+      du.segment<2>(2 * s) = node_increment(pt.slave_nodes[s]);
+      du.segment<2>(4 + 2 * s) = node_increment(pt.master_nodes[s]);
+    }
+    // Tractions act on the undeformed area: the surface stretch is small, and no area
+    // derivative enters the tangent.
+    const double A = area_weight[p] * pt.reference_area;
+    const auto [pressure, k_n] = contact::penalty_pressure(pt.gap, eps_n, settings.contact_smoothing);
+    Vector8 force = pressure * A * Nv;                        // contact force on both sides
+    Matrix8 stiffness = k_n * A * Nv * Nv.transpose();        // -∂f/∂u
+    Vector8 friction_force = Vector8::Zero();                 // its friction part
+    Matrix8 friction_stiffness = Matrix8::Zero();
+    // Geometric terms: the normal n, the tangent t and the master weights (1 − η, η)
+    // move with the master face e = x_2 − x_1 (length L) and with the projection η:
+    //   δn = t (n·δe)/L,  δt = −n (n·δe)/L,  δη = −(Tvᵀ δu + g (n·δe)/L)/L,
+    // with n·δe = −Dvᵀ δu, Dv = (0, 0, n, −n), Dt = (0, 0, t, −t). Hence
+    //   δNv = −(Tv Dvᵀ + Dv Tvᵀ + (g/L) Dv Dvᵀ) δu / L,
+    //   δTv = (Nv Dvᵀ − Dt Tvᵀ − (g/L) Dt Dvᵀ) δu / L.
+    // Where the closest point is a master node shared by two faces (nodal normal)
+    // these terms do not apply; there the slave point lies within |g| of the node and
+    // the terms they would replace are of order |g|/L.
+    const bool geometric = !pt.node_normal;
+    Vector8 Dv = Vector8::Zero(), Dt = Vector8::Zero();
+    double L = 1, gL = 0;
+    if (geometric) {
+      L = ((current.nodes[pt.master_nodes[1]] + node_increment(pt.master_nodes[1])) -
+           (current.nodes[pt.master_nodes[0]] + node_increment(pt.master_nodes[0])))
+              .norm();
+      gL = pt.gap / L;
+      Dv.segment<2>(4) = pt.normal;
+      Dv.segment<2>(6) = -pt.normal;
+      Dt.segment<2>(4) = pt.tangent;
+      Dt.segment<2>(6) = -pt.tangent;
+      stiffness += (pressure * A / L) * (Tv * Dv.transpose() + Dv * Tv.transpose() + gL * Dv * Dv.transpose());
+    }
+    if (mu > 0 && pressure > 0) {
+      // Regularised Coulomb friction (contact/mechanical_contact.hpp) on the trial
+      // traction τ_trial = τ_n + ε_T Δs.
+      const double slip = Tv.dot(du);  // tangential slip increment
+      const auto friction = contact::regularised_coulomb(tau[p][idx] + eps_t * slip, mu, pressure);
+      if (friction_coupling_only) {
+        point_dofs.add(local, Vector8::Zero(), -share * friction.d_pressure * k_n * A * Tv * Nv.transpose());
+        return;
+      }
+      trial_tau[p][idx] = friction.traction;
+      friction_force = -friction.traction * A * Tv;  // friction opposes the slip
+      // ∂slip/∂u = Tvᵀ + duᵀ ∂Tv/∂u; ∂p/∂u = −k_n Nvᵀ.
+      Vector8 dslip = Tv;
+      if (geometric) dslip += (du.dot(Nv) * Dv - du.dot(Dt) * (Tv + gL * Dv)) / L;
+      friction_stiffness = friction.d_trial * eps_t * A * Tv * dslip.transpose();
+      friction_stiffness -= friction.d_pressure * k_n * A * Tv * Nv.transpose();
+      if (geometric)
+        friction_stiffness +=
+            (friction.traction * A / L) * (Nv * Dv.transpose() - Dt * Tv.transpose() - gL * Dt * Dv.transpose());
+    }
+    if (!friction_coupling_only) point_dofs.add(local, force + share * friction_force, stiffness + share * friction_stiffness);
   }
 
   // Reduced residual (and tangent) at the current increment.

@@ -1,7 +1,9 @@
 // Interface laws (contact/interface_laws.hpp) against hand-computed values of the
 // paper's equations 1 and 2, central finite differences of every derivative the
-// solvers use, the limit h_e → 0 as σ_n → 0, the C¹ closure factor, and bonding.
+// solvers use, the limit h_e → 0 as σ_n → 0, the C¹ closure factor, bonding, and the
+// mechanical contact laws (contact/mechanical_contact.hpp).
 #include "contact/interface_laws.hpp"
+#include "contact/mechanical_contact.hpp"
 #include "materials/material_library.hpp"
 
 #include <gtest/gtest.h>
@@ -250,4 +252,54 @@ TEST(InterfaceLaws, PartlyBondedConductanceIsTheFadingFilmInSeriesWithTheBondedL
   EXPECT_NEAR(contact::partly_bonded_conductance(hc, hb, 0.9), 1 / (0.1 / hc + 0.9 / hb), 1e-4);
   EXPECT_EQ(contact::partly_bonded_conductance(0.0, hb, 0.7), 0.0);  // open contact: no path until bonded
   EXPECT_EQ(contact::partly_bonded_conductance(0.0, hb, 1.0), hb);
+}
+
+// The C¹ penalty law of the mechanical contact (contact/mechanical_contact.hpp): zero
+// when open, ε_N g²/(2δ) inside the smoothing width, ε_N(−g − δ/2) beyond it; pressure
+// and slope continuous at g = 0 and g = −δ, the slope −dp/dg equal to a central
+// difference everywhere.
+TEST(MechanicalContactLaws, PenaltyPressureIsC1AndItsSlopeIsTheDerivative) {
+  const double eps = 3e16, delta = 1e-6;
+  EXPECT_EQ(contact::penalty_pressure(1e-9, eps, delta).pressure, 0.0);
+  EXPECT_EQ(contact::penalty_pressure(0.0, eps, delta).stiffness, 0.0);
+  // Inside the width: g = −δ/2 gives ε δ/8 and slope ε/2.
+  EXPECT_NEAR(contact::penalty_pressure(-0.5 * delta, eps, delta).pressure, eps * delta / 8, 1e-12 * eps * delta);
+  EXPECT_NEAR(contact::penalty_pressure(-0.5 * delta, eps, delta).stiffness, 0.5 * eps, 1e-12 * eps);
+  // Beyond it: g = −2δ gives 1.5 ε δ and slope ε.
+  EXPECT_NEAR(contact::penalty_pressure(-2 * delta, eps, delta).pressure, 1.5 * eps * delta, 1e-12 * eps * delta);
+  EXPECT_EQ(contact::penalty_pressure(-2 * delta, eps, delta).stiffness, eps);
+  // Continuity of p and k at both joints (one-sided limits a tiny step apart).
+  for (double g0 : {0.0, -delta}) {
+    const double h = 1e-6 * delta;
+    const auto a = contact::penalty_pressure(g0 + h, eps, delta), b = contact::penalty_pressure(g0 - h, eps, delta);
+    EXPECT_NEAR(a.pressure, b.pressure, 3 * eps * h) << g0;
+    EXPECT_NEAR(a.stiffness, b.stiffness, 2 * eps * h / delta) << g0;
+  }
+  for (double g : {-0.1 * delta, -0.7 * delta, -1.3 * delta, -5 * delta}) {
+    const double fd = -central_difference([&](double x) { return contact::penalty_pressure(x, eps, delta).pressure; },
+                                          g, 1e-4 * delta);
+    EXPECT_NEAR(contact::penalty_pressure(g, eps, delta).stiffness, fd, 1e-6 * eps) << g;
+  }
+}
+
+// Regularised Coulomb friction: τ = μp tanh(τ_trial/(μp)) sticks with slope 1 for a
+// small trial traction, saturates at ±μp, and its two derivatives equal central
+// differences.
+TEST(MechanicalContactLaws, RegularisedCoulombSticksSaturatesAndHasExactDerivatives) {
+  const double mu = 0.3, p = 150e6, limit = mu * p;
+  const auto small = contact::regularised_coulomb(1e-6 * limit, mu, p);
+  EXPECT_NEAR(small.traction, 1e-6 * limit, 1e-15 * limit);
+  EXPECT_NEAR(small.d_trial, 1.0, 1e-12);
+  EXPECT_NEAR(contact::regularised_coulomb(50 * limit, mu, p).traction, limit, 1e-12 * limit);
+  EXPECT_NEAR(contact::regularised_coulomb(-50 * limit, mu, p).traction, -limit, 1e-12 * limit);
+  for (double u : {-2.0, -0.4, 0.3, 1.1}) {
+    const double trial = u * limit;
+    const auto law = contact::regularised_coulomb(trial, mu, p);
+    const double d_trial =
+        central_difference([&](double x) { return contact::regularised_coulomb(x, mu, p).traction; }, trial, 1e-5 * limit);
+    const double d_p =
+        central_difference([&](double x) { return contact::regularised_coulomb(trial, mu, x).traction; }, p, 1e-5 * p);
+    EXPECT_NEAR(law.d_trial, d_trial, 1e-7) << u;
+    EXPECT_NEAR(law.d_pressure, d_p, 1e-7 * mu) << u;
+  }
 }
