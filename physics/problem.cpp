@@ -101,9 +101,7 @@ void declare_interface(ConfigSchema& s, const std::string& name, const std::stri
            "paper's nominal 5e-4 lies below it)" + p1_note + ".");
 }
 
-ConfigSchema build_schema() {
-  ConfigSchema s("Weld case configuration", intro);
-
+void declare_case_and_stack(ConfigSchema& s) {
   s.section("case", "Identity of the case.");
   s.identifier("case.name").default_value("weld")
       .doc("Name of the case, used in output file names and echoed into results.");
@@ -121,7 +119,9 @@ ConfigSchema build_schema() {
   s.number("stack.sheets[].thickness", "m", "mm").default_value("1.0 mm")
       .range(Range::closed(0.1, 5))
       .doc("Sheet thickness (paper §2.1: 1 mm).");
+}
 
+void declare_electrodes_and_mesh(ConfigSchema& s) {
   s.section("electrodes", "The two electrode caps; upper and lower may differ.");
   declare_electrode(s, "upper");
   declare_electrode(s, "lower");
@@ -151,7 +151,9 @@ ConfigSchema build_schema() {
       .range(Range::closed(-1000, 1000)).doc("Upper end of the box.");
   s.integer("mesh.refinement_boxes[].levels").default_value("1").range(Range::closed(0, 4))
       .doc("Refinement levels below the base size inside the box.");
+}
 
+void declare_schedule(ConfigSchema& s) {
   s.section("schedule", "Welding schedule: piecewise-linear current and force tables.");
   s.table("schedule.current")
       .column("time", "s", "ms", Range::closed(0, 10000))
@@ -171,7 +173,9 @@ ConfigSchema build_schema() {
       .range(Range::closed(0, 10000))
       .doc("The run ends this long after the last point of the current table (paper §2.1: "
            "10 ms; the hold phase is not modelled).");
+}
 
+void declare_contact(ConfigSchema& s) {
   s.section("contact", "Contact laws at the electrode/sheet (E/S) and sheet/sheet (S/S) "
                        "interfaces.");
   declare_interface(s, "electrode_sheet", "electrode/sheet", "");
@@ -207,7 +211,9 @@ ConfigSchema build_schema() {
            "multiplied by a factor of its gap that falls smoothly (C1) from 1 at zero gap to 0 "
            "at this gap, so sheets that have parted beside the contact do not bond across the "
            "opening. Our choice, of the order of the surface roughness.");
+}
 
+void declare_thermal(ConfigSchema& s) {
   s.section("thermal", "Initial and boundary conditions of the thermal field, and the "
                        "modified conductivity of the melt.");
   s.number("thermal.initial_temperature", "degC", "degC").default_value("20 degC")
@@ -237,7 +243,9 @@ ConfigSchema build_schema() {
            "melting temperature. 0 is the paper's switch (eq. 3), a jump of k(T) with which the "
            "electro-thermal coupling can oscillate without converging and the outputs jump with "
            "the parameters; 20 K (default) is narrow against the 45 K freezing range of DP1200.");
+}
 
+void declare_solver(ConfigSchema& s) {
   s.section("solver", "Numerical settings. None depends on the model parameters, so every "
                      "output stays a smooth function of them (fixed step schedule, fixed "
                      "tolerances).");
@@ -256,8 +264,7 @@ ConfigSchema build_schema() {
   s.number("solver.early_phase_end", "s", "ms").default_value("20 ms")
       .range(Range::closed(0, 10000))
       .doc("End of the early phase measured from the weld start (itself a step); 0: no early "
-           "phase, every step up to solver.time_step. 20 ms (default since session 17, 30 ms "
-           "before) is the measured choice for the paper's schedule (docs/VERIFICATION.md, "
+           "phase, every step up to solver.time_step. 20 ms (default) is the measured choice for the paper's schedule (docs/VERIFICATION.md, "
            "'Time-step error').");
   s.integer("solver.squeeze_force_steps").default_value("10")
       .range(Range::closed(1, 1000))
@@ -318,7 +325,9 @@ ConfigSchema build_schema() {
            "melts: sticking, outside what the model represents): continue records a warning with "
            "the time, place and temperature in summary.json and results.h5 and goes on (outputs "
            "stay continuous in the parameters, which calibration needs); stop fails the run there.");
+}
 
+void declare_output(ConfigSchema& s) {
   s.section("output", "What a run writes.");
   s.string("output.directory").default_value("results")
       .doc("Directory for the run's outputs, relative to the working directory; not empty.");
@@ -336,6 +345,17 @@ ConfigSchema build_schema() {
            "written, and at the last step.");
   s.boolean("output.fields").default_value("true")
       .doc("Write ParaView field files (.pvd/.vtu) every output.field_interval.");
+}
+
+ConfigSchema build_schema() {
+  ConfigSchema s("Weld case configuration", intro);
+  declare_case_and_stack(s);
+  declare_electrodes_and_mesh(s);
+  declare_schedule(s);
+  declare_contact(s);
+  declare_thermal(s);
+  declare_solver(s);
+  declare_output(s);
   return s;
 }
 
