@@ -159,7 +159,7 @@ TEST(ElectricalContact, TwoBlockPotentialMatchesClosedForm) {
 // V = I/(πr²) (L/σ_1 + 1/C_b + L/σ_2), to 10⁻⁴ of V: the bulk entries of the interface
 // rows keep only ε·10¹² ≈ 2·10⁻⁴ of their value, so the error depends on the order in
 // which the assembly sums them (measured 3·10⁻⁸ of V with the cells summed colour by
-// colour, 2.5·10⁻⁶ in the cells' own order, session 19). The interface current
+// colour, 2.5·10⁻⁶ in the cells' own order). The interface current
 // C_b Δφ A, from a potential jump of 10⁻¹² of φ, carries that rounding: to 10⁻³.
 TEST(ElectricalContact, NearlyRigidBondedInterfaceSolvesToRoundOffOfItsBackwardError) {
   const double L = 1e-3, radius = 1e-3, current = 2e3, factor = 1e9;
