@@ -310,10 +310,10 @@ TEST(WeldRun, ElectrodeReachingSolidusWarnsOrStopsAsConfigured) {
 // about 7 ms; the run goes on (the default). A current raised tenfold at 31 ms then makes
 // it fail for certain (at 31 ms: whichever stage gives way first). The failure message
 // says when and where the electrode had first melted, whatever stage fails, because the
-// failure most likely follows from it. (This test used to rely on the film alone to
-// fail the run later: such a run fails or runs through on round-off — at 27 ms with
+// failure most likely follows from it. (The film alone does not fail the run reliably:
+// such a run fails or runs through on round-off, e.g. at 27 ms with
 // solver.friction_penalty_ratio = 1, at 149 ms with the default, not at all with
-// t_f = 0.5 mm, and through to the end after a change of GMRES's orthogonalisation.)
+// t_f = 0.5 mm.)
 TEST(WeldRun, FailureAfterElectrodeMeltingSaysWhenTheElectrodeMelted) {
   const fs::path dir = fs::temp_directory_path() / ("rsw_melted_" + std::to_string(::getpid()));
   std::string out;
