@@ -1,5 +1,5 @@
 // Bayesian calibration of a forward model against observed features (paper §2.4–2.5,
-// CALIBRATION.md §4–6): construct → run() → CalibrationResult.
+// docs/CALIBRATION.md): construct → run() → CalibrationResult.
 //
 //   posterior  f(θ | Y) = L(θ) f(θ) / c,   c = ∫ L(θ) f(θ) dθ   (the evidence)
 //   ln L(θ)    = −½ Σ_k r_kᵀ Σ⁻¹ r_k − (N_obs/2) ln det(2πΣ),  r_k = Y^(k) − M(θ)   (likelihood.hpp)
@@ -13,11 +13,12 @@
 // returned to SBALC as failed evaluations). A run that succeeds but leaves a feature of
 // the likelihood undefined (NaN: its signals lack the shape the feature needs, e.g. no
 // interior resistance peak; features.hpp) has no likelihood value: it is treated as a
-// failed run, recorded with the reason "feature R_beta undefined: <condition>", and kept
-// out of the GP. The posterior is then the SIR resample of
-// SBALC's prior pool with weights ∝ exp m(u) (Smith & Gelfand 1992; posterior.hpp),
-// reported in physical units: weighted mean and standard deviation of θ, equal-tailed
-// credible intervals (the u-quantiles mapped through the monotone u → θ_i), the MAP
+// failed run, recorded with the reason "feature R_beta undefined: <condition>", and
+// handed to SBALC as a failed evaluation (sbalc.hpp, "Failures"). The posterior is
+// then the SIR resample of SBALC's prior pool with weights ∝ exp m(u) (Smith &
+// Gelfand 1992; posterior.hpp), reported in physical units: weighted mean and
+// standard deviation of θ, equal-tailed credible intervals (the u-quantiles mapped
+// through the monotone u → θ_i), the MAP
 // (the largest surrogate posterior density in u, i.e. the surrogate's maximum
 // likelihood in the prior box for uniform-type priors), the effective sample size and
 // its warning.

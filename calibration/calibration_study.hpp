@@ -1,5 +1,5 @@
 // The `calibration:` section of a study file (`rsw calibrate STUDY`, paper §2.4–2.5,
-// CALIBRATION.md §4–6): what was measured, how noisy it is, and how SBALC and the
+// docs/CALIBRATION.md): what was measured, how noisy it is, and how SBALC and the
 // posterior are run. The parameters, priors, features and forward model are the
 // study's own (study.hpp).
 //

@@ -1,4 +1,4 @@
-// Designs of experiments in the unit cube (0, 1)^d (CALIBRATION.md §2); map them to
+// Designs of experiments in the unit cube (0, 1)^d (docs/CALIBRATION.md, "Designs"); map them to
 // the parameters with ParameterSpace::unit_points_to_standard / to_physical. Points are
 // rows of the returned matrices.
 //

@@ -1,6 +1,6 @@
 // The evaluation farm: runs every point of a design through a ForwardModel, in parallel,
 // and keeps each result in the study's HDF5 file the moment it is known
-// (docs/STUDIES.md; ARCHITECTURE.md "data flow of a study", principle 6).
+// (docs/STUDIES.md; docs/ARCHITECTURE.md, "Data flow of a study").
 //
 // Parallelism. On one machine the farm forks N worker processes (default: one per
 // core), each evaluating one point at a time with OpenMP and Eigen limited to one

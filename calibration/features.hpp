@@ -112,7 +112,7 @@ inline constexpr const char* temperature_max = "T_max";
 inline constexpr const char* time_temperature_max = "t_T_max";
 inline constexpr const char* temperature_end = "T_end";
 inline constexpr const char* cooling_rate = "T_dot_cool";
-// Nugget geometry [m] (MODEL.md §8), passed through from the simulator's results.
+// Nugget geometry [m] (physics/nugget.hpp), passed through from the simulator's results.
 inline constexpr const char* nugget_diameter_liquidus = "d_n_liq";
 inline constexpr const char* nugget_height_liquidus = "h_n_liq";
 inline constexpr const char* nugget_diameter_solidus = "d_n_sol";

@@ -15,7 +15,8 @@
 //   with the other hyperparameters, bounded below by a floor. For a deterministic
 //   simulator the nugget stands for reproducible numerical noise that the smooth latent
 //   f should not follow (Gramacy & Lee 2012, "Cases for the nugget in modeling computer
-//   experiments"); the paper's SBALC failed for want of it (CALIBRATION.md §6).
+//   experiments"); the paper's SBALC failed for want of it (docs/CALIBRATION.md, "The
+//   nugget").
 //
 // With K = σ² C + τ² I (+ jitter, below), the trend coefficients are the generalised
 // least-squares estimate β̂ = (HᵀK⁻¹H)⁻¹ HᵀK⁻¹ y (RW eq. 2.42) and the hyperparameters

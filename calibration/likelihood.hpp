@@ -1,4 +1,5 @@
-// Gaussian log-likelihood of named scalar features (paper §2.4, CALIBRATION.md §4).
+// Gaussian log-likelihood of named scalar features (paper §2.4; docs/CALIBRATION.md,
+// "Likelihood").
 //
 // With N_obs observed replicates Y^(k) (k = 1 … N_obs) of p features and the model
 // response M(θ), the measurement errors are taken as independent, zero mean, with a
@@ -49,7 +50,7 @@ class GaussianLikelihood {
   // Model features in the order of feature_names(). A NaN (a feature the run's signals
   // leave undefined, features.hpp) or infinite value has no likelihood: throws
   // std::invalid_argument naming the feature; the calibration records such a run as
-  // failed (calibrate.hpp), it never reaches the GP.
+  // failed (calibrate.hpp), and no value of it reaches the GP.
   double log_likelihood(const Eigen::VectorXd& model_features) const;
   // Model features by name; may contain more features than observed ones (ignored).
   // Throws std::invalid_argument naming the first observed feature that is missing.

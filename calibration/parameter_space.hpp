@@ -1,5 +1,6 @@
 // Calibration parameters θ: names, the config key each one sets, priors, and the
-// transforms between physical and standardised space (CALIBRATION.md §1).
+// transforms between physical and standardised space (docs/CALIBRATION.md, "Parameters
+// and priors").
 //
 // Priors and their standardised variable s:
 //   uniform [a, b]:            F(x) = (x − a)/(b − a),                           s = F(x) ∈ [0, 1]

@@ -1,5 +1,6 @@
 // SBALC: Streamlined Bayesian Active Learning Cubature (Li et al. 2025), with a nugget
-// for deterministic numerical noise (paper §2.5, §3.3; CALIBRATION.md §5–6).
+// for deterministic numerical noise (paper §2.5, §3.3; docs/CALIBRATION.md, "SBALC",
+// "The nugget").
 //
 // Works in the standardised parameter space where the prior is uniform on [0, 1]^d
 // (callers map θ_std to physical values through the inverse prior CDFs). The evidence
@@ -19,7 +20,7 @@
 // evaluation cap is reached (result.converged = false). The initial design is n_0 = 5
 // Hammersley points kept off the faces of the box (calibration/designs.hpp).
 //
-// Nugget extension (CALIBRATION.md §6). The FE log-likelihood carries reproducible
+// Nugget extension (docs/CALIBRATION.md, "The nugget"). The FE log-likelihood carries reproducible
 // discretisation noise; an interpolating GP chases it, its s never shrinks between
 // points and SBALC does not converge (paper §3.3). With gp.nugget_mode = Estimated (or
 // Fixed) the GP separates a smooth latent ℒ from noise of variance τ² (Gramacy & Lee

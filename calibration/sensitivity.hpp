@@ -1,4 +1,5 @@
-// Global sensitivity analysis of a finished study (CALIBRATION.md §3; paper §2.3, §3.2):
+// Global sensitivity analysis of a finished study (docs/CALIBRATION.md, "Sensitivity
+// analysis"; paper §2.3, §3.2):
 // for each feature y_k, a sparse PCE by hybrid LARS (calibration/pce.hpp) is fitted on
 // the successful runs in standardised space, s = T(θ) (ParameterSpace), and the Sobol
 // indices follow from its coefficients (calibration/sobol.hpp):

@@ -9,7 +9,7 @@
 //   S_T,i = Σ_{α: α_i>0} c_α² / D
 //   S_ij  = Σ_{α: α_i>0, α_j>0, α_k=0 (k≠i,j)} c_α² / D
 // at no extra model cost. Report them beside the PCE's LOO error, so a poor surrogate
-// is visible (CALIBRATION.md §3).
+// is visible (docs/CALIBRATION.md, "Sensitivity analysis").
 //
 // Independent Monte Carlo check for cheap functions: two independent N × d samples A,
 // B of the standardised inputs and A_B^(i) (A with column i from B), N(d + 2)

@@ -15,7 +15,7 @@
 // c_i: table thermal conductivities of the two sides (the λ_m modification of paper
 // eq. 3 models convection in the bulk melt and is not applied here); F_n: contact
 // normal stress (Pa); σ_d: yield stress of the softer side; P2 = 1 µm, P3 = P4 = 1 by
-// default (MODEL.md §4). The formula is finite at F_n = 0 (≈ 0.63 P1 c̄/P2), so it is
+// default (docs/MODEL.md, "Interfaces"). The formula is finite at F_n = 0 (≈ 0.63 P1 c̄/P2), so it is
 // applied on closed contact only; to keep the outputs smooth in the parameters the
 // flux is multiplied by a C¹ closure factor of the gap g (our choice):
 //     χ(g) = 1 − (3 s² − 2 s³),  s = clamp(g/g_c, 0, 1),
@@ -23,18 +23,18 @@
 // opens loses its thermal contact over the first micrometre instead of at once.
 //
 // Interface Joule heat: q_s = h_e (φ⁺ − φ⁻)² per unit area (W/m²), released half on
-// each side of the interface (the MOOSE/MALAMUTE convention of MODEL.md §3).
+// each side of the interface (the convention of MOOSE/MALAMUTE interface heating).
 //
 // Temperatures (our choice, the paper is silent): each side's properties (ρ_i, c_i,
 // its yield stress) at that side's own temperature at the point, T_slave or
 // T_master, interpolated on its face. Where the thermal contact is good the two are
-// close and any rule agrees; where they differ, the mean (the rule until
-// 2026-11-23) gave one body's material the other's temperature — a copper face at
-// 1000 °C against steel at 1160 °C read as molten copper (its resistivity doubles
-// across the 1070–1080 °C melting range), and the lagged E/S conductances then made
-// the electro-thermal coupling cycle (docs/PERFORMANCE.md).
+// close and any rule agrees; where they differ, their mean would give one body's
+// material the other's temperature — a copper face at 1000 °C against steel at
+// 1160 °C would read as molten copper (its resistivity doubles across the
+// 1070–1080 °C melting range), and the lagged E/S conductances then make the
+// electro-thermal coupling cycle (docs/MODEL.md, "Interfaces").
 //
-// Bonding (our choice, MODEL.md §3): a S/S point bonds as both sides approach their
+// Bonding (our choice; docs/MODEL.md, "Interfaces"): a S/S point bonds as both sides approach their
 // solidus, with a degree β that rises smoothly from 0 at Δ (`contact.bonding_band`,
 // 50 K) below the colder side's solidus to 1 at it, and never falls (history per
 // pairing point, committed after a converged step). Where β < 1 the film's resistance
@@ -112,7 +112,7 @@ bool bonds(double temperature_slave, double solidus_slave, double temperature_ma
 // Bonding degree β ∈ [0, 1] at the temperatures of the two sides (°C):
 //   β = S(x), x = clamp((min(T_s − T_sol,s, T_m − T_sol,m) + Δ)/Δ, 0, 1), S(x) = 3x² − 2x³,
 // 0 up to Δ below the solidus of the colder side, 1 from the solidus (both sides) on,
-// C¹ in between; Δ = 0 is bonds() as 0 or 1. Our choice (MODEL.md §3).
+// C¹ in between; Δ = 0 is bonds() as 0 or 1. Our choice (docs/MODEL.md, "Interfaces").
 double bonding_degree(double temperature_slave, double solidus_slave, double temperature_master,
                       double solidus_master, double band);
 // Sheets fuse only where they touch: the bonding degree a point may reach at its gap g

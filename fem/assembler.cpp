@@ -283,7 +283,7 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
     // profile on a virtual machine, when the threaded loop went colour by colour,
     // docs/PERFORMANCE.md). The cells in their own order, hub cells included (visiting
     // them colour by colour, all over the mesh, cost the default weld 13 % in cache
-    // misses: docs/PERFORMANCE.md, session 19).
+    // misses: docs/PERFORMANCE.md).
     LocalSystem local;
     for (int e = 0; e < mesh_.n_cells(); ++e) {
       local.matrix.setZero(n_local, n_local);

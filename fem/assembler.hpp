@@ -9,8 +9,8 @@
 // Newton iteration and time step) only zeroes and accumulates values. Cells are
 // visited in their own order, which keeps neighbouring cells' data and matrix entries
 // together in the caches (visiting them colour by colour, across the whole mesh each
-// time, made the default weld 13 % slower on one core: docs/PERFORMANCE.md, session
-// 19). With one thread no OpenMP region is entered (each of its barriers costs a
+// time, makes the default weld 13 % slower on one core: docs/PERFORMANCE.md). With
+// one thread no OpenMP region is entered (each of its barriers costs a
 // system call, even in a team of one). With T threads the cells are split into T
 // blocks of consecutive numbers; each thread assembles, in order, the cells of its
 // block whose free dofs no other block touches, and the cells on the block borders

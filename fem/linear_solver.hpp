@@ -11,8 +11,8 @@
 // reach (each slave face with all master faces within the search margin), and most of
 // those entries stay exactly zero. They add no value but much fill: on the default
 // weld's thermal tangent 2.3·10⁷ against 0.8–1.1·10⁷ flops per factorisation, on the
-// mechanics tangent's symmetric part 8.9·10⁷ against 3.5·10⁷ (docs/PERFORMANCE.md,
-// session 19). Dropping exact zeros changes nothing in the factorised matrix; the
+// mechanics tangent's symmetric part 8.9·10⁷ against 3.5·10⁷ (docs/PERFORMANCE.md).
+// Dropping exact zeros changes nothing in the factorised matrix; the
 // pattern only grows (a new nonzero entry, such as a contact point reaching another
 // master face, is taken in with a new analysis), so the analysis is redone rarely.
 #pragma once
@@ -134,7 +134,7 @@ class PreconditionedGmres {
   // factor is applied in single precision: for a large factor, whose solves stream
   // it from memory, that pays even where the flop count would choose the simplicial
   // factorisation (the default weld's mechanics tangent, 56 flops per entry once its
-  // never-used contact entries are left out: docs/PERFORMANCE.md, session 19).
+  // never-used contact entries are left out: docs/PERFORMANCE.md).
   void set_supernodal(bool on);
   // The current preconditioner is applied in single precision.
   bool single_precision_active() const;

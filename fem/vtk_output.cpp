@@ -150,7 +150,7 @@ void write_piece_atomically(const fs::path& target, Data* data) {
   writer->EncodeAppendedDataOff();
   // LZ4 (readable by ParaView 5.5 and later): the default weld's 33 field files take
   // 36 MB and 0.27 s to write, against 28 MB and 0.75 s with zlib at its fastest level
-  // and 57 MB and 0.30 s uncompressed (one core, docs/PERFORMANCE.md, session 19).
+  // and 57 MB and 0.30 s uncompressed (one core, docs/PERFORMANCE.md).
   writer->SetCompressorTypeToLZ4();
   writer->SetCompressionLevel(1);
   writer->SetHeaderTypeToUInt64();

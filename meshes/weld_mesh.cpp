@@ -123,10 +123,10 @@ std::vector<RefinementBox> refinement_boxes(const StackGeometry& stack, const Me
 
 // The contact surface of an electrode is its dome and the first millimetre of its flank
 // (measured radially from the face edge): late in a weld the indentation can carry the
-// sheet around the face edge, and a surface that ended there let the sheet pass into
-// the flank unseen, while the contact points of the edge cycled between sheet segments
-// (the Newton stall at 143 ms of design point 30 of the paper-mesh Table I study,
-// docs/MODEL_HISTORY.md, "Contact at the electrode's face edge"). Flank points out of contact
+// sheet around the face edge, and a surface that ended there would let the sheet pass
+// into the flank unseen, while the contact points of the edge cycle between sheet
+// segments (design point 30 of the paper-mesh Table I study then stalls in the
+// mechanics at 143 ms; docs/MECHANICS.md, "Contact"). Flank points out of contact
 // carry nothing.
 constexpr double flank_contact_width = 1e-3;  // m
 

@@ -1,4 +1,4 @@
-// Quasi-static electrical conduction in the electrode/sheet stack (MODEL.md §3).
+// Quasi-static electrical conduction in the electrode/sheet stack (docs/MODEL.md, "Fields").
 //
 //     ∇·(σ(T) ∇φ) = 0 in every body,   σ = 1/ρ_e(T)   (S/m; φ in V)
 // on the current configuration (node positions passed in), σ evaluated at each Gauss
@@ -34,7 +34,7 @@
 // (φᵀKφ = φᵀF, to the linear tolerance 10⁻¹⁰), so the thermal solver receives the
 // electrical power.
 //
-// Sources: paper §2.1.1; MODEL.md §3; verification problems in VERIFICATION.md
+// Sources: paper §2.1.1; docs/MODEL.md; verification problems in docs/VERIFICATION.md
 // (uniform rod, two-block contact).
 #pragma once
 

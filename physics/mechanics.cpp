@@ -84,10 +84,10 @@ struct Mechanics::Impl {
   // contact, so a tie formed while the surfaces were still a little apart does not
   // prop them apart as a strut. n_b, t_b: the pairing's normal and tangent when the
   // tie formed. Where β grows, the new share takes over the friction traction it
-  // carried (e_n gains −Δβ τ t_b / ε_N), so the traction is continuous. (Before
-  // 2026-11-26 the whole share β acted on the offset since the tie first formed: a
-  // degree rising from 10⁻⁵ to 1 in one step multiplied micrometres of slip at a
-  // nearly unbonded point into a 19 kN nodal force; docs/MECHANICS.md.)
+  // carried (e_n gains −Δβ τ t_b / ε_N), so the traction is continuous. (Were the
+  // whole share β to act on the offset since the tie first formed, a degree rising
+  // from 10⁻⁵ to 1 in one step would multiply micrometres of slip at a nearly
+  // unbonded point into a 19 kN nodal force; docs/MECHANICS.md.)
   struct Tie {
     bool on = false;
     double degree = 0;  // bonding degree β ∈ [0, 1], never decreasing

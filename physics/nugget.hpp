@@ -1,4 +1,4 @@
-// Nugget geometry measured on the interpolated peak-temperature field (MODEL.md §8).
+// Nugget geometry measured on the interpolated peak-temperature field (docs/MODEL.md, "Outputs").
 //
 // The nugget at an isotherm is the part of the sheets where the peak temperature
 // reached so far is at or above the isotherm temperature of the sheet's material

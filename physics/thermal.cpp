@@ -120,9 +120,9 @@ struct Thermal::Impl {
     // new tangent of the fixed pattern with the pivot sequence of the last pivoted
     // factorisation (fem::LinearSolver; test
     // LinearSolver.KluRefactorisationKeepsThePivotsAndIsBackwardStable): on the default
-    // weld 6.4 against UMFPACK's 13 ms per factorisation, the same fields
-    // (docs/PERFORMANCE.md; 2.7–3.6 ms since the unused contact entries are left out of
-    // the factorised pattern, session 19). No iterative refinement: the Newton loop below
+    // weld 2.7–3.6 ms per factorisation on the entries ever nonzero (6.4 ms on the
+    // whole contact pattern, against UMFPACK's 13 ms), the same fields
+    // (docs/PERFORMANCE.md). No iterative refinement: the Newton loop below
     // re-evaluates the true residual after every correction, and a chord step's
     // factorisation is of an earlier tangent anyway.
     if (s.n_gauss < 1 || s.n_gauss > 3) throw std::invalid_argument("Thermal: n_gauss must be 1, 2 or 3");

@@ -1,4 +1,4 @@
-// Transient heat conduction in the electrode/sheet stack (MODEL.md §4), backward
+// Transient heat conduction in the electrode/sheet stack (docs/MODEL.md, "Fields"), backward
 // Euler in enthalpy form, solved by Newton's method:
 //
 //   Σ_a M_a (H(T_a) − H(T_a^n))/Δt v_a + ∫ k(T) ∇T·∇v dV
@@ -78,7 +78,7 @@
 // temperatures, the last as the consistent reaction), so that a driver can check
 // ∫ V I dt = stored + removed.
 //
-// Sources: paper §2.1.2 (eq. 3) and §2.1.1 (eq. 2); MODEL.md §4; enthalpy method after
+// Sources: paper §2.1.2 (eq. 3) and §2.1.1 (eq. 2); docs/MODEL.md; enthalpy method after
 // V.R. Voller, C.R. Swaminathan, B.G. Thomas, Int. J. Numer. Meth. Eng. 30 (1990)
 // 875–898 (fixed-grid enthalpy with nodal lumping).
 #pragma once

@@ -4,7 +4,8 @@
 //
 // - Ishigami (Ishigami & Homma 1990), θ ∈ [−π, π]³:
 //     f = sin θ1 + a sin² θ2 + b θ3⁴ sin θ1,  a = 7, b = 0.1
-//   S = (0.3139, 0.4424, 0), S_T = (0.5576, 0.4424, 0.2437), S_13 = 0.2437 (CALIBRATION.md §7).
+//   S = (0.3139, 0.4424, 0), S_T = (0.5576, 0.4424, 0.2437), S_13 = 0.2437
+//   (docs/CALIBRATION.md, "Verification").
 // - Smooth: any number of parameters and features, y_k = Σ_i cos((k + 1)(i + 1) θ_i / 7)
 //   + (k + 1) θ_1, a deterministic function whose every value is bit-reproducible.
 // Behaviour switches act on θ_1 (the first parameter): above fail_above the run returns

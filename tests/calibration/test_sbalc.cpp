@@ -4,7 +4,7 @@
 //     2000 × 2000 grid;
 //   - the linear-Gaussian log-likelihood plus deterministic high-frequency noise, the
 //     situation in which the paper's SBALC did not converge (paper §3.3), handled by the
-//     estimated nugget (CALIBRATION.md §6).
+//     estimated nugget (docs/CALIBRATION.md, "The nugget").
 // All problems live in the standardised space with the uniform prior on [0,1]², so the
 // evidence is c = ∫_{[0,1]²} exp ℒ(θ) dθ. Each test prints evidence errors and
 // evaluation counts.

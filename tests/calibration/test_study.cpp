@@ -226,9 +226,10 @@ TEST(Study, ReferenceDocIsCurrent) {
 // --- sensitivity -----------------------------------------------------------------------
 
 TEST(Sensitivity, IshigamiStudyGivesExactIndices) {
-  // The Ishigami function (CALIBRATION.md §7) as a study: three parameters uniform on
-  // [−π, π], 400 LHS points run through the farm on two worker processes, the model
-  // failing for θ1 > 3.1 (a few runs, excluded and counted), PCE with degree cap 12.
+  // The Ishigami function (docs/CALIBRATION.md, "Verification") as a study: three
+  // parameters uniform on [−π, π], 400 LHS points run through the farm on two worker
+  // processes, the model failing for θ1 > 3.1 (a few runs, excluded and counted), PCE
+  // with degree cap 12.
   const fs::path dir = fresh_dir("ishigami");
   write_file(dir / "case.yaml", "analytic: {function: ishigami, fail_above: 3.1}\n");
   const fs::path file = write_file(dir / "ishigami.yaml", R"(study: {name: ishigami}

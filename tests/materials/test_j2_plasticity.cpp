@@ -1,5 +1,5 @@
-// J2 return mapping on single points (VERIFICATION.md, mechanical: "J2 return
-// mapping checked on a single point along a prescribed strain path"): Hooke's law
+// J2 return mapping on single points along prescribed strain paths
+// (docs/VERIFICATION.md, "Physics"): Hooke's law
 // below yield from hand-computed Lame constants, the yield condition and normality
 // along a load-unload-reverse path, the consistent tangent and the temperature
 // derivative of the stress against central differences, uniaxial stress against the

@@ -104,7 +104,7 @@ TEST(MaterialLibrary, ShippedMaterialsLoad) {
   EXPECT_GT(steel.yield_stress(0, 1200).yield_stress, 10e6);
   EXPECT_LT(steel.yield_stress(0, 1200).yield_stress, 100e6);
 
-  // MODEL.md values of the electrode alloy at 20 degC.
+  // The electrode alloy's values at 20 degC (materials/data/CuCrZr.yaml).
   const Material copper = library.load("CuCrZr");
   EXPECT_DOUBLE_EQ(copper.density(20).value, 8900.0);
   EXPECT_DOUBLE_EQ(copper.specific_heat(20).value, 380.0);

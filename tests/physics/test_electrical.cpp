@@ -1,5 +1,5 @@
 // Electrical conduction (physics/electrical) against closed forms: the uniform rod
-// R = ρL/(πr²) (exact on any mesh), the two-block contact column of VERIFICATION.md
+// R = ρL/(πr²) (exact on any mesh), the two-block contact column (docs/VERIFICATION.md)
 // (exact for bilinear elements, also on non-matching meshes), and current and energy
 // conservation on the default weld stack with contact, bonding and a hot spot.
 #include "mechanics_fixtures.hpp"
@@ -103,10 +103,10 @@ TEST(ElectricalVerification, UniformRodResistanceIsExactOnHangingNodeMesh) {
   for (double q : sol.joule_heat) EXPECT_NEAR(q, J * J * rho, 1e-9 * J * J * rho);
 }
 
-// VERIFICATION.md, two blocks of length L with conductivities σ_1 (current side) and
-// σ_2 (grounded side) and interface conductance C_E. With x the distance from the
-// current face and V the potential there, the closed form (blocks of unit length in
-// VERIFICATION.md, scaled to length L):
+// Two blocks of length L with conductivities σ_1 (current side) and σ_2 (grounded
+// side) and interface conductance C_E. With x the distance from the current face and
+// V the potential there, the closed form (derived for blocks of unit length, scaled
+// to length L):
 //   φ_1(x) = V (1 − C_E σ_2 x / D),  φ_2(x) = −V C_E σ_1 (x − 2L) / D,
 //   D = σ_1σ_2 + C_E L (σ_1 + σ_2),   V = I/(πr²) (L/σ_1 + 1/C_E + L/σ_2).
 // C_E is Bay–Wanheim at a fixed 80 MPa contact pressure. The blocks have different
@@ -159,7 +159,7 @@ TEST(ElectricalContact, TwoBlockPotentialMatchesClosedForm) {
 // V = I/(πr²) (L/σ_1 + 1/C_b + L/σ_2), to 10⁻⁴ of V: the bulk entries of the interface
 // rows keep only ε·10¹² ≈ 2·10⁻⁴ of their value, so the error depends on the order in
 // which the assembly sums them (measured 3·10⁻⁸ of V with the cells summed colour by
-// colour, 2.5·10⁻⁶ in the cells' own order, session 19). The interface current
+// colour, 2.5·10⁻⁶ in the cells' own order). The interface current
 // C_b Δφ A, from a potential jump of 10⁻¹² of φ, carries that rounding: to 10⁻³.
 TEST(ElectricalContact, NearlyRigidBondedInterfaceSolvesToRoundOffOfItsBackwardError) {
   const double L = 1e-3, radius = 1e-3, current = 2e3, factor = 1e9;

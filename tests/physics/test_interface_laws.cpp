@@ -65,7 +65,7 @@ TEST(InterfaceLaws, BayWanheimConductanceVanishesSmoothlyWithPressure) {
   EXPECT_NEAR(contact::bay_wanheim_conductance(1e30, ss, rho, rc, tf).conductance, 1 / (rc * tf), 1e-9 / (rc * tf));
 }
 
-// Paper eq. 2 at F_n = 0 and F_n = σ_d with MODEL.md's constants, and with other P3, P4.
+// Paper eq. 2 at F_n = 0 and F_n = σ_d with docs/MODEL.md's constants, and with other P3, P4.
 TEST(InterfaceLaws, SimufactConductanceMatchesPaperEquationTwo) {
   const double p1 = 1e-3, c1 = 320, c2 = 30, sd = 400e6;
   const contact::ThermalContactConstants defaults;

@@ -174,9 +174,9 @@ TEST(MechanicsJacobian, TiedInterfaceTangentMatchesFiniteDifferences) {
 // touch along z = 0, the upper one moved rigidly by ±0.4 µm (within the 1 µm smoothing of
 // the penalty law). Pressed in, the bonded interface pushes back exactly as the unbonded
 // contact does; pulled apart by the same distance, it pulls back with the same forces,
-// opposite in sign, where the unbonded interface carries nothing. Until 2026-11-26 a tie
-// also resisted compression from the state it formed in, so sheets bonded while a few
-// micrometres apart were held apart like a strut.
+// opposite in sign, where the unbonded interface carries nothing. A tie that also
+// resisted compression from the state it formed in would hold sheets bonded while a
+// few micrometres apart apart like a strut.
 TEST(MechanicsContact, BondedPointsResistOpeningAsTheContactResistsPenetration) {
   const TwoBlockCase c;
   ASSERT_EQ(c.mesh.body_names[0], "upper");

@@ -1,5 +1,5 @@
 // Heat conduction (physics/thermal), alone and driven by the electrical field,
-// against the closed forms of VERIFICATION.md: the Joule-heated rod with a cooled
+// against the closed forms listed in docs/VERIFICATION.md: the Joule-heated rod with a cooled
 // lateral face, adiabatic Joule heating with a linearly rising resistivity, the
 // two-block electro-thermal contact with interface heat split half/half, the
 // one-phase Stefan problem in enthalpy form, the first-order temporal convergence of
@@ -146,7 +146,7 @@ TEST(ThermalVerification, JouleHeatedRodMatchesParabolicProfile) {
 
 // Uniform current density J through an insulated rod with ρ_e(T) = ρ_0 (1 + β ΔT) and no
 // conduction (uniform field): ρc dΔT/dt = J² ρ_0 (1 + β ΔT), so
-//   ΔT(t) = [exp(J² ρ_0 β t/(ρc)) − 1]/β  ≈ 443 K at 50 ms (VERIFICATION.md values).
+//   ΔT(t) = [exp(J² ρ_0 β t/(ρc)) − 1]/β  ≈ 443 K at 50 ms (the values below).
 // Staggered coupling iterated to convergence in every step (Joule heat at T_{n+1}).
 TEST(ThermalVerification, AdiabaticJouleHeatingFollowsExponentialLaw) {
   const double J = 2.83e8, rho_0 = 2.5e-7, beta = 4e-3, rho_c = 3.93e6, density = 7860;
@@ -277,7 +277,7 @@ TEST(ThermalVerification, TwoBlockElectroThermalContactMatchesClosedForm) {
   EXPECT_NEAR(E.removed_fixed, E.generated(), 1e-6 * E.generated());
 }
 
-// One-phase Stefan problem in enthalpy form (VERIFICATION.md): solid at the melting
+// One-phase Stefan problem in enthalpy form (docs/VERIFICATION.md): solid at the melting
 // temperature, wall raised by ΔT = 100 K; c = 700, L = 2.7e5, k = 30, ρ = 7000 give
 // St = cΔT/L, λ e^{λ²} erf(λ) = St/√π, λ = 0.3459, s(t) = 2λ√(αt) = 0.541 mm at 0.1 s.
 // A 1-D column of 5 µm cells, melting range 1 K (solidus 1500 °C = initial T), steps of

@@ -278,8 +278,8 @@ TEST(WeldRun, FieldsOpenInVtkAndSignalsInHdf5) {
 
 // The electrodes press on the sheets throughout, so the electrode/sheet contact radii
 // stay positive and do not shrink while the current flows (the contact grows as the
-// sheets soften). Until 2026-11-22 the radius was the outermost gap sign change and
-// fell to 0 once the contact reached the last paired point near the face edge.
+// sheets soften), also once the contact reaches the last paired points near the face
+// edge.
 TEST(WeldRun, ElectrodeContactRadiusStaysPositiveUnderForce) {
   const auto run = read_csv(coarse_run() / "signals.csv");
   for (const char* name : {"contact_radius_es_upper [m]", "contact_radius_es_lower [m]"}) {
@@ -347,10 +347,10 @@ TEST(WeldRun, ElectrodeReachingSolidusWarnsOrStopsAsConfigured) {
 // about 7 ms; the run goes on (the default). A current raised tenfold at 31 ms then makes
 // it fail for certain (at 31 ms: whichever stage gives way first). The failure message
 // says when and where the electrode had first melted, whatever stage fails, because the
-// failure most likely follows from it. (This test used to rely on the film alone to
-// fail the run later: such a run fails or runs through on round-off — at 27 ms with
+// failure most likely follows from it. (The film alone does not fail the run reliably:
+// such a run fails or runs through on round-off, e.g. at 27 ms with
 // solver.friction_penalty_ratio = 1, at 149 ms with the default, not at all with
-// t_f = 0.5 mm, and through to the end after a change of GMRES's orthogonalisation.)
+// t_f = 0.5 mm.)
 TEST(WeldRun, FailureAfterElectrodeMeltingSaysWhenTheElectrodeMelted) {
   const fs::path dir = fs::temp_directory_path() / ("rsw_melted_" + std::to_string(::getpid()));
   std::string out;
@@ -371,9 +371,9 @@ TEST(WeldRun, FailureAfterElectrodeMeltingSaysWhenTheElectrodeMelted) {
 // Design point 58 of the coarse Table I study (a resistive S/S film, t_f = 0.088 mm,
 // and the E/S film of a clean face): the sheets start to melt at the S/S contact 14–15
 // ms into the weld, and the thermal Newton must converge there. With chord steps kept
-// while the corrections only halved (commit 0bf7153) it stalled at 15 ms, 40
-// iterations with corrections of 7.7 K, and so did nine more runs of that study (19 of
-// 90 failed against 9); refactorising unless they shrink fourfold converges. Whether
+// while the corrections only halve it stalls at 15 ms, 40 iterations with corrections
+// of 7.7 K, and so do nine more runs of that study (19 of 90 fail against 9);
+// refactorising unless they shrink fourfold converges. Whether
 // this one point stalls depends on round-off (it ran through with the schedule cut
 // after 21 ms); the study's count does not. The whole weld, as in the study (~3 s).
 TEST(WeldRun, ThermalNewtonConvergesThroughTheMeltingOnsetAtAResistiveSheetFilm) {
@@ -420,23 +420,15 @@ TEST(WeldRun, ThermalNewtonChecksDescentOfCorrectionsAsWideAsAMeltingRange) {
   fs::remove_all(dir);
 }
 
-// The coarse Table I study (90 welds over the paper's prior, about 2.5 min on two
-// cores) as a check of robustness: a solver change that leaves the default weld equal
-// to 10⁻⁶ can still change which runs of the prior finish. Every run it fails must have
-// melted an electrode first (the resistive end of the E/S film prior, outside the
-// model), and few do: 9 or 10 of 90 with the builds of 2026-11-25 and uniform 1 ms
-// steps, 15 with the early phase of 0.25 ms steps (six more runs whose electrode melts
-// stop in the mechanics during it; on the paper's mesh the early phase takes the study
-// from 19 to 14 failures), 11 since the thermal Newton iteration checks the descent of
-// corrections as wide as copper's melting range (four runs had stalled in loose
-// coupling iterates at a melting electrode; test above), 2 since the electrode alloy
-// keeps its 900 °C mechanical properties above 900 °C instead of softening into a melt
-// (materials/data/CuCrZr.yaml; the other nine had folded or stalled at a sinking
-// electrode face), 19 with the thermal chord policy that stalled at melting onsets (one
-// of them, design point 58, with no melting electrode), found only by rerunning the
-// study (docs/STUDIES.md), 1 with the early phase to 20 ms, none since a growing bond
-// carries only the motion since each share bonded (session 18; looser GMRES
-// tolerances in the mechanics then failed 2, docs/PERFORMANCE.md).
+// The coarse Table I study (90 welds over the paper's prior, about 2 min on two cores)
+// as a check of robustness: a solver change that leaves the default weld equal to
+// 10⁻⁶ can still change which runs of the prior finish (a thermal chord policy that
+// stalls at melting onsets fails 19, one of them, design point 58, with no melting
+// electrode; looser GMRES tolerances in the mechanics fail 2: docs/PERFORMANCE.md).
+// Every run it fails must have melted an electrode first (the resistive end of the
+// E/S film prior, outside the model), and at most 2 may fail: the current build fails
+// 1, whose electrode melts 4 ms into the weld and whose fate depends on round-off
+// (docs/STUDIES.md).
 TEST(WeldRun, CoarseTableOneStudyFailsOnlyRunsWhoseElectrodeMelted) {
   const fs::path dir = fs::temp_directory_path() / ("rsw_study_" + std::to_string(::getpid()));
   std::string out;
@@ -465,17 +457,14 @@ TEST(WeldRun, CoarseTableOneStudyFailsOnlyRunsWhoseElectrodeMelted) {
 // A very resistive S/S film (run 76 of the paper-mesh Table I study: t_f,S/S = 5.6·10⁻⁵ m,
 // ρ_c,S/S = 1.8·10⁻⁵ Ω·m) melts the sheets first at the edge of their contact. With the
 // one-pass S/S contact, and the sheets bonding across any gap (contact.bonding_gap
-// 1 mm: the rule before 2026-11-26), the bottom cell of sheet_1 beyond the edge of the
-// bonded region, 62.5 µm on the paper's mesh, is sheared until one corner folds at
-// 69 ms while its quadrature-point Jacobians stay positive. (Found at 21 ms with the
-// ties of that time, which also held the sheets apart in compression; at 139 ms, in
-// sheet_2, before a growing bond carried only the motion since each share bonded; with
-// the default bonding gap of 1 µm this weld finishes, its worst cell at 0.53.) Without
-// the check such a run went on for tens of milliseconds on the folded cell, whose
-// conductance entries grew to 10¹³ times the others'. The run must fail there, saying
-// where and when, and leave no summary that looks valid. (~25 s: the paper's mesh; the
-// coarse mesh's 125 µm cells do not fold. Uniform 1 ms steps, as when the fold was
-// found.)
+// 1 mm), the bottom cell of sheet_1 beyond the edge of the bonded region, 62.5 µm on
+// the paper's mesh, is sheared until one corner folds at 69 ms while its
+// quadrature-point Jacobians stay positive. (With the default bonding gap of 1 µm this
+// weld finishes, its worst cell at 0.53.) Without the check such a run would go on for
+// tens of milliseconds on the folded cell, whose conductance entries grow to 10¹³
+// times the others'. The run must fail there, saying where and when, and leave no
+// summary that looks valid. (~25 s: the paper's mesh; the coarse mesh's 125 µm cells
+// do not fold. Uniform 1 ms steps.)
 TEST(WeldRun, FoldedCellFailsTheRunSayingWhereAndWhen) {
   const fs::path dir = fs::temp_directory_path() / ("rsw_folded_" + std::to_string(::getpid()));
   std::string out;
@@ -497,19 +486,19 @@ TEST(WeldRun, FoldedCellFailsTheRunSayingWhereAndWhen) {
   fs::remove_all(dir.string() + ".partial");
 }
 
-// Smoothness in the parameters (MODEL.md §9), measured where calibration needs it:
+// Smoothness in the parameters (docs/MODEL.md, "Known limitations"; the paper's
+// Fig. 6), measured where calibration needs it:
 // R_γ, T_max (features of the signal file) and d_n,sol (summary.json) at five values
 // of the E/S thermal contact constant P1 spaced 0.01 apart in log10 around the
 // default (1e-2), coarse mesh. A smooth response has second differences of order
 // f''·h², numerical noise (elements counted, a step schedule or mesh that moves with
 // θ, loose tolerances) second differences of the noise's size whatever h. The
-// spacing was 0.02 until 2026-11-26; since the sheets bond only where they touch, R_γ
-// rises steeply just below the default and levels off at log10 P1 ≈ −1.98 (12 runs
-// 0.01 apart from −2.06: 111.0, 111.7, 112.5, 113.4, 114.1, 114.7, 115.6, 116.4,
-// 116.9, 117.04, 117.09, 117.15 µΩ: a smooth knee, where the end-of-weld growth of
-// the E/S contact stops reaching the end of the feature window), and at 0.02 the
-// knee's curvature alone gave 13 % of the change over the prior. Measured
-// (2026-11-26, early phase to 20 ms): R_γ 4.2 %, T_max and d_n,sol below 1 % of their change over the
+// spacing is 0.01, not 0.02: R_γ rises steeply just below the default and levels off
+// at log10 P1 ≈ −1.98 (12 runs 0.01 apart from −2.06: 111.0, 111.7, 112.5, 113.4,
+// 114.1, 114.7, 115.6, 116.4, 116.9, 117.04, 117.09, 117.15 µΩ: a smooth knee, where
+// the end-of-weld growth of the E/S contact stops reaching the end of the feature
+// window), and at 0.02 the knee's curvature alone gives 13 % of the change over the
+// prior. Measured: R_γ 4.2 %, T_max and d_n,sol below 1 % of their change over the
 // whole prior, P1 from 1e-3 to 1e-1; the remainder is of contact-front and bonding
 // events that happen per point and per time step. The bound, 10 %, is the
 // resolution a Gaussian-process surrogate with a nugget needs to see the trend.
@@ -547,7 +536,7 @@ TEST(WeldRun, NumericalNoiseInP1IsSmallAgainstTheChangeOverThePrior) {
 // coarse case at uniform steps (no early phase) of 1, 0.5 and 0.25 ms (the table
 // breakpoints and output times are steps in every run) gives observed orders
 // log2(|f(1) − f(½)| / |f(½) − f(¼)|) of 0.90 for the electrical energy ∫VI dt and 1.14
-// for R_α, the point of steepest rise (measured 2026-11-26). The peak R_β and the mean
+// for R_α, the point of steepest rise. The peak R_β and the mean
 // R_m of the 1 ms signals (orders 0.49 and 0.69 there) are not yet asymptotic on this
 // mesh: the contact fronts advance by whole cell faces, each a step in R (docs/
 // VERIFICATION.md, "Time-step error"); they are printed with the error of uniform 1 ms

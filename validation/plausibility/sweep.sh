@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Where the default case stands against the plausibility ranges of the design notes
+# Where the default case stands against the plausibility ranges of docs/MODEL.md
 # (dynamic resistance peak 100-250 uOhm, electrode displacement 10-60 um, nugget
 # 4-6.5 mm, 10-20 % of the electrical energy in the nugget), and what moves it there:
 # the paper's case on the coarse mesh at welding currents of 5-8 kA, with the paper's

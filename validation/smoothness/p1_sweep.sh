@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
-# The smoothness diagnostic of MODEL.md §9 (the paper's Fig. 6): the paper's case on a
-# coarse mesh at N closely spaced values of log10 P1 (E/S HTC constant) around the
-# default, and for three features the ratio of the largest second difference to the
-# largest first difference. A smooth feature gives a small ratio (second differences
-# shrink like h², first like h); numerical noise gives ratios near 1 or above.
+# The smoothness diagnostic of the paper's Fig. 6 (docs/MODEL.md, "Known
+# limitations"): the paper's case on a coarse mesh at N closely spaced values of
+# log10 P1 (E/S HTC constant) around the default, and for three features the ratio
+# of the largest second difference to the largest first difference. A smooth feature
+# gives a small ratio (second differences shrink like h², first like h); numerical
+# noise gives ratios near 1 or above.
 #   bash validation/smoothness/p1_sweep.sh [N=5] [STEP=0.02] [extra --set options]
 set -euo pipefail
 cd "$(dirname "$0")/../.."

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The paper's Fig. 6 diagnostic (MODEL.md §9) over the whole P1 prior: the paper's case
+# The paper's Fig. 6 diagnostic (docs/VERIFICATION.md) over the whole P1 prior: the paper's case
 # on the coarse mesh at N values of log10 P1 evenly spaced over [-3, -1] (the E/S HTC
 # constant's prior, Table I), the signal features of each run (`rsw features`), and
 # for each feature the residual after detrending — a least-squares polynomial of
