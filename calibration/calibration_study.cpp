@@ -192,8 +192,8 @@ void declare_calibration_keys(fem::ConfigSchema& s) {
       .doc("Stop when (c_upper - c_lower)/c < tolerance on two consecutive iterations (paper: 0.1).");
   s.choice("calibration.sbalc.nugget", {"off", "fixed", "estimated"}).default_value("estimated")
       .doc("Noise variance of the GP of the log-likelihood: off (interpolating, the paper's), fixed "
-           "(nugget_standard_deviation) or estimated with the other hyperparameters (docs/STUDIES.md, "
-           "'Bayesian calibration').");
+           "(nugget_standard_deviation) or estimated with the other hyperparameters (docs/CALIBRATION.md, "
+           "'The nugget').");
   s.number("calibration.sbalc.nugget_standard_deviation", "1", "1").default_value("0.1")
       .range(Range::greater_than(0))
       .doc("fixed: the noise standard deviation tau of the log-likelihood, in log-likelihood units.");

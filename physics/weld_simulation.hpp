@@ -1,25 +1,27 @@
-// The weld process driver: one run of a weld case from the squeeze to the end of
-// the schedule, with its outputs.
+// The weld run: one run of a weld case from the squeeze to the end of the schedule,
+// with its outputs. run_weld() is the entry point; the stages are the methods of
+// physics::WeldDriver (weld_driver.hpp).
 //
 // Stages:
 //  1. Squeeze (physics/squeeze): seat the stack under displacement control, then
 //     raise the electrode force to F(0) in `solver.squeeze_force_steps` steps.
-//  2. Weld stage, t = 0 ... end of current + cool time, on a fixed step schedule:
-//     every breakpoint of the current and force tables and every output time is a
-//     step boundary, and no step is longer than `solver.time_step`. The schedule
-//     depends on the case's tables and settings only, never on model parameters.
-//     Each step iterates electrical ⇄ thermal to `solver.coupling_tolerance` on the
-//     contact state of the last mechanics solve, then solves the mechanics at the
-//     step's force and new temperature (staggered coupling).
+//  2. Weld stage, t = 0 ... end of current + cool time, on a fixed step schedule
+//     (weld_step_times): every breakpoint of the current and force tables, every
+//     output time and solver.early_phase_end are step boundaries; no step is longer
+//     than solver.early_time_step up to early_phase_end, or solver.time_step after
+//     it. The schedule depends on the case's tables and settings only, never on the
+//     model parameters. Each step iterates electrical ⇄ thermal to
+//     `solver.coupling_tolerance` on the contact state of the last mechanics solve
+//     (physics/electro_thermal_step), then solves the mechanics at the step's force
+//     and new temperature (physics/mechanics_stepper; staggered coupling).
 //
 // Outputs, written into `<dir>.partial/` and moved to `<dir>/` only when the run has
 // finished (a failed run leaves `<dir>.partial/` with `failure.txt` and never a
-// complete-looking `<dir>/`):
+// complete-looking `<dir>/`); physics/weld_output.hpp lists the fields:
 //   results.h5    signals, squeeze history, contact pressure profiles at output times,
-//                 the resolved config, version, timing (h5py / h5dump readable)
+//                 nugget, energy, the resolved config, version, timing (h5py / h5dump)
 //   signals.csv   the signals, one row per output time, units in the header
-//   fields.pvd    ParaView time series of fields_NNNN.vtm (displacement, temperature,
-//                 von Mises stress, equivalent plastic strain, contact pressure/gap)
+//   fields.pvd    ParaView time series of fields_NNNN.vtm
 //   summary.json  status, resolved config, version, timing, iteration counts and the
 //                 key results
 #pragma once

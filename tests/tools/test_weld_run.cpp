@@ -170,8 +170,9 @@ TEST(WeldRun, CoarseRunSignalsAreBitIdenticalToTheStoredReference) {
     const std::vector<double> got = h5.read_doubles("/signals/" + names[c]);
     ASSERT_EQ(got.size(), columns[c].size()) << names[c];
     for (std::size_t i = 0; i < got.size(); ++i)
-      if (!(std::isnan(got[i]) && std::isnan(columns[c][i])))
+      if (!(std::isnan(got[i]) && std::isnan(columns[c][i]))) {
         ASSERT_EQ(got[i], columns[c][i]) << names[c] << " at row " << i << ": differs in the bits";
+      }
   }
   fs::remove_all(dir);
 }
