@@ -983,13 +983,6 @@ fs::path task_results_file(const fs::path& study_file, const TaskPartition& task
   return part;
 }
 
-bool started_by_mpi_launcher() {
-  for (const char* variable : {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK", "PMI_SIZE"}) {
-    if (std::getenv(variable) != nullptr) return true;
-  }
-  return false;
-}
-
 bool built_with_mpi() {
 #ifdef RSW_HAVE_MPI
   return true;
@@ -1157,7 +1150,7 @@ FarmSummary EvaluationFarm::run() {
   bool use_mpi = false;
   switch (options_.distribution) {
     case FarmDistribution::automatic:
-      use_mpi = built_with_mpi() && started_by_mpi_launcher();
+      use_mpi = built_with_mpi() && options_.started_by_mpi_launcher;
       break;
     case FarmDistribution::local:
       break;

@@ -129,6 +129,9 @@ struct FarmOptions {
   double run_timeout = 0;  // [s] per run; a worker over the limit is killed, the run recorded
                            // as failed. 0: no limit
   FarmDistribution distribution = FarmDistribution::automatic;
+  // Set by the program when mpirun/mpiexec started this process (the library reads no
+  // environment): `automatic` then spreads the runs over the MPI ranks.
+  bool started_by_mpi_launcher = false;
   // Progress lines "runs 37/90, 1 failed, elapsed 1m12s, ETA 1m50s" go here (nullptr:
   // none), at most every progress_interval seconds and once at the end. A negative
   // interval picks 0.5 s on a terminal (the line is rewritten in place) and 10 s
@@ -234,9 +237,7 @@ MergeSummary merge_study_files(const StudyDesign& design, const std::filesystem:
 // "1m12s", "45s", "2h03m".
 std::string format_duration(double seconds);
 
-// True if this process was started by mpirun/mpiexec (OpenMPI, MPICH, PMIx variables),
-// and whether this build of rsw supports MPI.
-bool started_by_mpi_launcher();
+// Whether this build of rsw supports MPI.
 bool built_with_mpi();
 
 }  // namespace rsw::calibration

@@ -12,7 +12,7 @@ set(RSW_CALIBRATION_FARM_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/sensitivity.cpp
   ${CMAKE_CURRENT_LIST_DIR}/calibration_study.cpp
   ${CMAKE_CURRENT_LIST_DIR}/calibrate.cpp)
-set(RSW_CALIBRATION_FARM_LIBS rsw_fem)
+set(RSW_CALIBRATION_FARM_LIBS rsw_fem nlohmann_json::nlohmann_json)
 
 option(RSW_WITH_MPI "Run studies over MPI ranks when an MPI library is found" ON)
 if(RSW_WITH_MPI)

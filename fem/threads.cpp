@@ -4,7 +4,6 @@
 
 #include <dlfcn.h>
 #include <omp.h>
-#include <vtkSMPTools.h>
 
 #include <atomic>
 #include <cstdio>
@@ -23,12 +22,9 @@ void use_threads(int n) {
   omp_set_num_threads(n);
   if (n == 1) {
     omp_set_max_active_levels(0);
-    vtkSMPTools::SetBackend("Sequential");
   } else {
     omp_set_max_active_levels(1);
     omp_set_dynamic(0);  // n means n: libgomp's adjustment would cut it by the load average
-    vtkSMPTools::SetBackend(VTK_SMP_BACKEND);  // the build's default (Debian: TBB)
-    vtkSMPTools::Initialize(n);
   }
   g_regions_inline.store(n == 1, std::memory_order_relaxed);
 }

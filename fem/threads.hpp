@@ -12,8 +12,8 @@
 // writers) run on TBB threads in Debian's build, which ask the system for the number of
 // processors on every loop and spin in sched_yield after it (measured on the coarse
 // weld: 7657 reads of /sys/devices/system/cpu/online and 105 000 sched_yield calls, a
-// second thread busy for about 9 % of the run): one thread selects VTK's sequential
-// backend. And with one thread a parallel region runs without an OpenMP team at all
+// second thread busy for about 9 % of the run): the VTK writers (fem/vtk_output.cpp)
+// select VTK's sequential backend on one thread. And with one thread a parallel region runs without an OpenMP team at all
 // (threads.cpp, GOMP_parallel): a team of one still makes a futex system call at each
 // of its barriers.
 #pragma once
@@ -21,7 +21,7 @@
 namespace rsw::fem {
 
 // n == 1: every parallel region, ours and the libraries', runs on the calling thread
-// (max-active-levels 0, no OpenMP team; VTK's sequential backend). n > 1: n threads
+// (max-active-levels 0, no OpenMP team; VTK's writers sequential). n > 1: n threads
 // for our loops, and a library's fixed request for more is cut to n.
 // Throws std::invalid_argument for n < 1.
 void use_threads(int n);

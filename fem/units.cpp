@@ -33,8 +33,11 @@ UnitSystem& unit_system() {
   // static destructor would race with other static destructors that still convert.
   static UnitSystem* instance = [] {
     ut_set_error_message_handler(ut_ignore);
-    const char* env = std::getenv("UDUNITS2_XML_PATH");
-    const std::string path = (env != nullptr && *env != '\0') ? env : default_database;
+    // UDUNITS-2 names the database: UDUNITS2_XML_PATH if set (read by UDUNITS-2, not
+    // by rsw), else the path it was built with (Debian: /usr/share/xml/udunits).
+    ut_status status = UT_SUCCESS;
+    const char* named = ut_get_path_xml(nullptr, &status);
+    const std::string path = named != nullptr ? named : default_database;
     ut_system* system = ut_read_xml(path.c_str());
     if (system == nullptr) {
       throw UnitError("cannot read the UDUNITS-2 unit database '" + path +

@@ -7,6 +7,10 @@
 // instead of by body. Each file goes to `<name>.tmp` first and is renamed into place.
 #include "fem/vtk_output.hpp"
 
+#include "fem/threads.hpp"
+
+#include <omp.h>
+
 #include <vtkCellArray.h>
 #include <vtkCellData.h>
 #include <vtkCommand.h>
@@ -22,6 +26,7 @@
 #include <vtkPointData.h>
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
+#include <vtkSMPTools.h>
 #include <vtkSmartPointer.h>
 #include <vtkStringArray.h>
 #include <vtkUnsignedCharArray.h>
@@ -139,8 +144,26 @@ void write_text_atomically(const fs::path& target, const std::string& text) {
 // fills a string first: writing the file directly, it makes a system call (write or
 // lseek) per data block header and array, about 570 per file (150 000 per coarse
 // weld), each several microseconds in a virtual machine.
+// VTK's own loops (vtkSMPTools, in the writers) follow the process's thread count
+// (fem/threads.hpp): one thread selects the sequential backend (Debian's default, TBB,
+// asks the system for the processors on every loop and spins after it), n threads
+// the build's default backend on n threads.
+void follow_thread_count() {
+  static int selected = 0;  // the thread count the backend was last set for
+  const int n = parallel_regions_run_inline() ? 1 : omp_get_max_threads();
+  if (n == selected) return;
+  if (n == 1) {
+    vtkSMPTools::SetBackend("Sequential");
+  } else {
+    vtkSMPTools::SetBackend(VTK_SMP_BACKEND);
+    vtkSMPTools::Initialize(n);
+  }
+  selected = n;
+}
+
 template <typename Writer, typename Data>
 void write_piece_atomically(const fs::path& target, Data* data) {
+  follow_thread_count();
   vtkNew<Writer> writer;
   vtkNew<ErrorCollector> errors;
   writer->AddObserver(vtkCommand::ErrorEvent, errors);

@@ -121,6 +121,9 @@ std::string join(const std::vector<std::string>& parts) {
   return text.empty() ? "(none)" : text;
 }
 
+
+}  // namespace
+
 std::vector<std::string> split_path_list(const std::string& text) {
   std::vector<std::string> parts;
   std::size_t start = 0;
@@ -134,8 +137,6 @@ std::vector<std::string> split_path_list(const std::string& text) {
   }
   return parts;
 }
-
-}  // namespace
 
 fem::ConfigSchema material_file_schema() {
   fem::ConfigSchema schema(
@@ -294,11 +295,19 @@ MaterialLibrary::MaterialLibrary() : MaterialLibrary(default_directories()) {}
 MaterialLibrary::MaterialLibrary(std::vector<std::string> directories)
     : directories_(std::move(directories)) {}
 
+namespace {
+std::vector<std::string>& user_directories() {
+  static std::vector<std::string> directories;
+  return directories;
+}
+}  // namespace
+
+void MaterialLibrary::set_user_directories(std::vector<std::string> directories) {
+  user_directories() = std::move(directories);
+}
+
 std::vector<std::string> MaterialLibrary::default_directories() {
-  std::vector<std::string> directories;
-  if (const char* env = std::getenv("RSW_MATERIALS_PATH"); env != nullptr) {
-    directories = split_path_list(env);
-  }
+  std::vector<std::string> directories = user_directories();
   directories.emplace_back(RSW_MATERIALS_DIR);
   return directories;
 }

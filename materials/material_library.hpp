@@ -13,10 +13,11 @@
 // reference.
 //
 // MaterialLibrary searches a list of directories in order for <name>.yaml. The
-// default list is the directories of the environment variable RSW_MATERIALS_PATH
-// (separated by ':'), if set, followed by the source tree's materials/data (compile
-// definition RSW_MATERIALS_DIR), so a user directory can add grades or shadow the
-// shipped ones.
+// default list is the user directories set by the program (the `rsw` program takes
+// them from the environment variable RSW_MATERIALS_PATH, separated by ':'; the
+// library reads no environment), followed by the source tree's materials/data
+// (compile definition RSW_MATERIALS_DIR), so a user directory can add grades or
+// shadow the shipped ones.
 #pragma once
 
 #include "fem/config.hpp"
@@ -36,6 +37,9 @@ class MaterialNotFound : public fem::ConfigError {
 // The declared keys of a material data file.
 fem::ConfigSchema material_file_schema();
 
+// "a:b::c" → {"a", "b", "c"}: a ':'-separated directory list, empty entries dropped.
+std::vector<std::string> split_path_list(const std::string& text);
+
 // Reads and checks one material file. Throws fem::ConfigError.
 Material load_material_file(const std::string& path);
 
@@ -45,8 +49,11 @@ class MaterialLibrary {
   MaterialLibrary();
   explicit MaterialLibrary(std::vector<std::string> directories);
 
-  // RSW_MATERIALS_PATH entries (if set), then the shipped materials/data.
+  // The user directories (set_user_directories), then the shipped materials/data.
   static std::vector<std::string> default_directories();
+  // Directories searched before the shipped data by every default-constructed
+  // library of this process.
+  static void set_user_directories(std::vector<std::string> directories);
 
   const std::vector<std::string>& directories() const { return directories_; }
   // Names of the materials found (file stems of *.yaml), sorted, each once.

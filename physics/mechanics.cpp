@@ -130,7 +130,6 @@ struct Mechanics::Impl {
         force_constraints(dofs.n_dofs()),
         displacement_constraints(dofs.n_dofs()),
         n_q(s.n_gauss * s.n_gauss) {
-    if (std::getenv("RSW_VERBOSE")) settings.verbose = true;
     if (s.n_gauss < 1 || s.n_gauss > 3) throw std::invalid_argument("Mechanics: n_gauss must be 1, 2 or 3");
     if (static_cast<int>(body_materials.size()) != mesh.n_bodies())
       throw std::invalid_argument("Mechanics: one material per body expected");
@@ -754,7 +753,7 @@ struct Mechanics::Impl {
   }
   fem::SparseMatrix surrogate, surrogate_coupling;  // preconditioner_surrogate()'s result and scratch
 
-  // Debug aid (RSW_VERBOSE): compares the tangent with a finite difference of the
+  // Debug aid (MechanicsSettings::verbose): compares the tangent with a finite difference of the
   // residual along the Newton direction and names the node with the worst mismatch.
   void diagnose(Control ctrl, const Eigen::VectorXd& base, const Eigen::VectorXd& step, fem::SparseMatrix& K) {
     fem::Constraints& cons = ctrl == Control::force ? force_constraints : displacement_constraints;

@@ -98,7 +98,7 @@ struct MechanicsSettings {
   // their Gauss points; equal to round-off (false: every cell at its Gauss points).
   bool linear_elastic_updates = true;
   int n_gauss = 2;
-  bool verbose = false;                   // print Newton iterations to stderr (also RSW_VERBOSE=1)
+  bool verbose = false;                   // print Newton iterations to stderr
   // Supports: u_z = 0 on `fixed_boundary`; the nodes of `loaded_boundary` share one
   // axial displacement w (force or displacement controlled); with clamp_radially,
   // u_r = 0 on both. u_r = 0 on every boundary named "<body>.axis".

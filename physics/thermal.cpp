@@ -115,7 +115,6 @@ struct Thermal::Impl {
         constraints(dofs.n_dofs()),
         implicit_blend(s.melt_conductivity > 0 && s.melt_smoothing > 0 && s.implicit_melt_blend),
         solver(implicit_blend ? fem::SolverKind::klu : fem::SolverKind::cholmod) {
-    if (std::getenv("RSW_VERBOSE")) settings.verbose = true;
     // The unsymmetric tangent (λ_m blend) is factorised by KLU, which refactorises each
     // new tangent of the fixed pattern with the pivot sequence of the last pivoted
     // factorisation (fem::LinearSolver; test

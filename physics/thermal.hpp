@@ -126,7 +126,7 @@ struct ThermalSettings {
   // Each step starts from the linear extrapolation of the last two committed fields
   // (from the committed field if false or at the first step).
   bool extrapolate = true;
-  bool verbose = false;  // print Newton iterations to stderr (also RSW_VERBOSE=1)
+  bool verbose = false;  // print Newton iterations to stderr
 };
 
 // The settings of a weld case (initial temperature, cooling, air, λ_m).

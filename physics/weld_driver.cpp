@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <fstream>
 #include <limits>
 #include <stdexcept>
@@ -82,12 +81,13 @@ double nugget_enthalpy(const fem::Mesh& mesh, const std::vector<fem::Point>& pos
 
 }  // namespace
 
-WeldDriver::WeldDriver(const Problem& problem, fs::path output_dir, std::function<void(const Progress&)> progress)
+WeldDriver::WeldDriver(const Problem& problem, fs::path output_dir, std::function<void(const Progress&)> progress,
+                       bool verbose)
     : problem_(problem),
       output_dir_(std::move(output_dir)),
       partial_(output_dir_.string() + ".partial"),
       progress_(std::move(progress)),
-      verbose_(std::getenv("RSW_VERBOSE") != nullptr),
+      verbose_(verbose),
       clock_(result_.timing),
       nugget_energy_fraction_(std::nan("")) {}
 
@@ -164,6 +164,7 @@ void WeldDriver::setup() {
   ms.tangential_penalty_ratio = problem_.solver.friction_penalty_ratio;
   ms.residual_tolerance = problem_.solver.mechanics_tolerance;
   ms.error_estimate_tolerance = problem_.solver.mechanics_error_estimate;
+  ms.verbose = verbose_;
   if (problem_.solver.two_pass_sheet_contact)
     for (const auto& [name, pair] : mesh_.interfaces)
       if (name.rfind("ss_", 0) == 0) ms.two_pass_interfaces.push_back(name);
@@ -230,7 +231,8 @@ void WeldDriver::setup_weld() {
   clock_.start("setup");
   model_ = interface_model(mesh_, problem_.contact);
   electrical_ = std::make_unique<Electrical>(mesh_, body_materials_, model_);
-  const ThermalSettings th = thermal_settings(problem_.thermal);
+  ThermalSettings th = thermal_settings(problem_.thermal);
+  th.verbose = verbose_;
   thermal_ = std::make_unique<Thermal>(mesh_, body_materials_, model_, th);
   CouplingSettings cs;
   cs.acceleration_depth = problem_.solver.coupling_acceleration_depth;

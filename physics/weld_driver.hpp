@@ -64,8 +64,9 @@ struct RecordedState {
 
 class WeldDriver {
  public:
+  // `verbose`: every coupling and Newton iteration to stderr.
   WeldDriver(const Problem& problem, std::filesystem::path output_dir,
-             std::function<void(const Progress&)> progress = {});
+             std::function<void(const Progress&)> progress = {}, bool verbose = false);
   ~WeldDriver();
   WeldDriver(const WeldDriver&) = delete;  // the solvers hold references to the mesh
   WeldDriver& operator=(const WeldDriver&) = delete;

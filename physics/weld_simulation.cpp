@@ -44,8 +44,8 @@ std::vector<double> weld_step_times(const Problem& problem) {
 }
 
 RunResult run_weld(const Problem& problem, const fs::path& output_dir,
-                   const std::function<void(const Progress&)>& progress) {
-  WeldDriver driver(problem, output_dir, progress);
+                   const std::function<void(const Progress&)>& progress, bool verbose) {
+  WeldDriver driver(problem, output_dir, progress, verbose);
   return driver.run();
 }
 

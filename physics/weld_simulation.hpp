@@ -112,7 +112,8 @@ struct Progress {
 // Runs the case and writes its outputs (see above). Never throws for a failing
 // simulation: the failure is in RunResult::message and in failure.txt. Bad input
 // (unknown material, unwritable directory) throws.
+// `verbose` prints every coupling and Newton iteration to stderr (a diagnosis aid).
 RunResult run_weld(const Problem& problem, const std::filesystem::path& output_dir,
-                   const std::function<void(const Progress&)>& progress = {});
+                   const std::function<void(const Progress&)>& progress = {}, bool verbose = false);
 
 }  // namespace rsw::physics

@@ -8,6 +8,7 @@
 // whose one "feature" says whether the model wrote signals (1) or has none (0); the
 // adapter calls ForwardModel::simulate_signals(θ, predictive/<run>/).
 #include "tools/calibrate_command.hpp"
+#include "tools/mpi_launcher.hpp"
 #include "tools/plots.hpp"
 
 #include "calibration/calibrate.hpp"
@@ -518,7 +519,7 @@ cal::StudyDesign calibration_design(const cal::Study& study) {
 void run_calibrate(const CalibrateOptions& options, const ForwardModelFactory& factory) {
   cal::Study study = cal::Study::load(options.study_file, options.overrides);
   if (!options.output_dir.empty()) study.set_output_folder(options.output_dir);
-  if (cal::started_by_mpi_launcher()) {
+  if (started_by_mpi_launcher()) {
     throw std::runtime_error("rsw calibrate runs its batches on worker processes of one machine; start it without "
                              "mpirun (use --workers N)");
   }

@@ -10,6 +10,7 @@
 // file, line, key, value and what is allowed; other failures exit with code 1.
 #include "fem/config.hpp"
 #include "fem/threads.hpp"
+#include "materials/material_library.hpp"
 #include "tools/config_commands.hpp"
 #include "tools/calibrate_command.hpp"
 #include "tools/mesh_command.hpp"
@@ -47,6 +48,9 @@ int main(int argc, char** argv) {
     else
       rsw::fem::use_threads(omp_get_max_threads());
   });
+  // User material directories before the shipped data (materials/data/README.md).
+  if (const char* path = std::getenv("RSW_MATERIALS_PATH"); path != nullptr)
+    rsw::materials::MaterialLibrary::set_user_directories(rsw::materials::split_path_list(path));
   rsw::tools::add_mesh_command(app);
   rsw::tools::add_simulate_command(app);
   rsw::tools::add_study_commands(app, rsw::tools::make_weld_model);

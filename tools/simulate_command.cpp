@@ -26,6 +26,7 @@ struct SimulateOptions {
   std::string output_dir;
   std::vector<std::string> overrides;
   bool quiet = false;
+  bool verbose = false;
 };
 
 double value_of(const std::vector<std::pair<std::string, double>>& values, const std::string& name) {
@@ -100,7 +101,7 @@ void run_simulate(const SimulateOptions& options) {
     std::fprintf(stderr, "%sweld: step %d/%d, t = %.1f ms, T_max %.0f degC, %s%s%s", terminal ? "\r" : "", p.step,
                  p.n_steps, p.time * 1e3, p.max_temperature, resistance, left, terminal ? "   " : "\n");
   };
-  const auto result = physics::run_weld(problem, dir, progress);
+  const auto result = physics::run_weld(problem, dir, progress, options.verbose);
   if (!options.quiet && terminal) std::fprintf(stderr, "\n");
   if (!result.success)
     throw std::runtime_error("simulation failed: " + result.message + " (see " + dir + ".partial/failure.txt)");
@@ -131,6 +132,8 @@ void add_simulate_command(CLI::App& app) {
       ->take_all()
       ->allow_extra_args(false);
   cmd->add_flag("-q,--quiet", options->quiet, "No progress output");
+  cmd->add_flag("--verbose", options->verbose,
+                "Print every electro-thermal coupling and Newton iteration to stderr (diagnosis)");
   cmd->callback([options]() { run_simulate(*options); });
 }
 

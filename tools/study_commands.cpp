@@ -3,6 +3,7 @@
 // failure reason, the undefined features of a successful run) is written whenever a
 // study file is complete, after `run` or `merge`.
 #include "tools/study_commands.hpp"
+#include "tools/mpi_launcher.hpp"
 #include "tools/plots.hpp"
 
 #include "calibration/farm.hpp"
@@ -186,6 +187,7 @@ void run_study(const StudyOptions& options, const ForwardModelFactory& factory) 
   if (!options.task.empty()) farm_options.task = cal::TaskPartition::parse(options.task);
   farm_options.run_timeout = options.run_timeout;
   farm_options.progress = options.quiet ? nullptr : &std::cerr;
+  farm_options.started_by_mpi_launcher = started_by_mpi_launcher();
   const std::unique_ptr<cal::ForwardModel> model = factory(study);
   if (!model) throw std::runtime_error("study '" + study.name() + "': no forward model");
   const fs::path file = cal::task_results_file(study.results_file(), farm_options.task);

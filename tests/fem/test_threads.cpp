@@ -7,7 +7,6 @@
 #include <dlfcn.h>
 #include <gtest/gtest.h>
 #include <omp.h>
-#include <vtkSMPTools.h>
 
 #include <string>
 
@@ -72,17 +71,6 @@ TEST(Threads, SharedLibrariesFindTheExecutablesParallelEntryPoint) {
   ASSERT_NE(dladdr(global, &where), 0);
   ASSERT_NE(dladdr(runtime, &where), 0);
   EXPECT_NE(std::string(where.dli_fname).find("gomp"), std::string::npos) << where.dli_fname;
-}
-
-// VTK's loops (the .vtu writers) run sequentially on one thread: no TBB worker that
-// spins after each loop; with several threads VTK's default backend returns.
-TEST(Threads, OneThreadAlsoHoldsForVtksLoops) {
-  rsw::fem::use_threads(1);
-  EXPECT_EQ(std::string(vtkSMPTools::GetBackend()), "Sequential");
-  EXPECT_EQ(vtkSMPTools::GetEstimatedNumberOfThreads(), 1);
-  rsw::fem::use_threads(2);
-  EXPECT_EQ(std::string(vtkSMPTools::GetBackend()), VTK_SMP_BACKEND);
-  rsw::fem::use_threads(1);
 }
 
 // n threads mean n, whatever the machine's load (no dynamic adjustment), and a fixed

@@ -150,20 +150,15 @@ TEST(MaterialLibrary, UnknownMaterialNamesSearchedDirectories) {
   }
 }
 
-TEST(MaterialLibrary, EnvironmentDirectoriesComeFirstAndShadowShippedFiles) {
+TEST(MaterialLibrary, UserDirectoriesComeFirstAndShadowShippedFiles) {
   const ScratchDirectory user("env");
   const std::string shipped_text = read_text(shipped_directory + "/DP1200.yaml");
   user.write("DP1200.yaml", replaced(shipped_text, "yield_stress: 20 MPa", "yield_stress: 7 MPa"));
-  const char* previous = std::getenv("RSW_MATERIALS_PATH");
-  const std::string saved = previous != nullptr ? previous : "";
-  ::setenv("RSW_MATERIALS_PATH", (user.path() + ":/nonexistent_rsw_dir").c_str(), 1);
+  // As the rsw program sets them from RSW_MATERIALS_PATH.
+  MaterialLibrary::set_user_directories(split_path_list(user.path() + ":/nonexistent_rsw_dir"));
   const std::vector<std::string> directories = MaterialLibrary::default_directories();
   const MaterialLibrary library;
-  if (previous != nullptr) {
-    ::setenv("RSW_MATERIALS_PATH", saved.c_str(), 1);
-  } else {
-    ::unsetenv("RSW_MATERIALS_PATH");
-  }
+  MaterialLibrary::set_user_directories({});
   ASSERT_EQ(directories.size(), 3u);
   EXPECT_EQ(directories[0], user.path());
   EXPECT_EQ(directories[1], "/nonexistent_rsw_dir");

@@ -3,7 +3,10 @@
 // XML readers, and every count, coordinate and array value is compared with the input.
 #include "fem/vtk_output.hpp"
 
+#include "fem/threads.hpp"
+
 #include <gtest/gtest.h>
+#include <vtkSMPTools.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -298,6 +301,20 @@ TEST_F(VtkOutput, ReadingMissingFileNamesIt) {
     EXPECT_NE(std::string(e.what()).find(missing.string()), std::string::npos) << e.what();
   }
   EXPECT_THROW(rsw::fem::read_pvd(dir_ / "nothing.pvd"), std::runtime_error);
+}
+
+// VTK's loops in the writers follow the process's thread count (fem/threads.hpp): one
+// thread selects the sequential backend (no TBB worker that spins after each loop),
+// several threads VTK's default backend again.
+TEST_F(VtkOutput, WritersFollowTheProcessThreadCount) {
+  rsw::fem::use_threads(1);
+  rsw::fem::write_vtm(dir_ / "one.vtm", two_body_mesh());
+  EXPECT_EQ(std::string(vtkSMPTools::GetBackend()), "Sequential");
+  EXPECT_EQ(vtkSMPTools::GetEstimatedNumberOfThreads(), 1);
+  rsw::fem::use_threads(2);
+  rsw::fem::write_vtm(dir_ / "two.vtm", two_body_mesh());
+  EXPECT_EQ(std::string(vtkSMPTools::GetBackend()), VTK_SMP_BACKEND);
+  rsw::fem::use_threads(1);
 }
 
 }  // namespace

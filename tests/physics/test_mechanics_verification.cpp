@@ -174,7 +174,6 @@ TEST(MechanicsVerification, HertzDomeOnFlatMatchesClosedForm) {
   const fem::Mesh mesh = meshes::weld_mesh(stack, ms);
   physics::MechanicsSettings s;
   s.friction_coefficient = 0;
-  s.verbose = std::getenv("RSW_VERBOSE") != nullptr;
   physics::Mechanics mech(mesh, {&copper, &steel, &steel, &copper}, s, 20.0);
   const Eigen::VectorXd T = Eigen::VectorXd::Constant(mesh.n_nodes(), 20.0);
 

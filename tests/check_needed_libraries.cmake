@@ -1,0 +1,22 @@
+# Fails if the program BINARY depends on a shared library whose name matches the
+# regular expression FORBIDDEN (the NEEDED entries of its dynamic section, readelf -d).
+# Usage: cmake -DBINARY=path -DFORBIDDEN=regex -P check_needed_libraries.cmake
+execute_process(COMMAND readelf -d ${BINARY} OUTPUT_VARIABLE dynamic RESULT_VARIABLE status)
+if(NOT status EQUAL 0)
+  message(FATAL_ERROR "readelf -d ${BINARY} failed (${status})")
+endif()
+string(REGEX MATCHALL "\\(NEEDED\\)[^\n]*" needed "${dynamic}")
+list(LENGTH needed n)
+if(n EQUAL 0)
+  message(FATAL_ERROR "${BINARY} lists no NEEDED libraries: not a dynamically linked program?")
+endif()
+set(bad "")
+foreach(entry IN LISTS needed)
+  if(entry MATCHES "${FORBIDDEN}")
+    list(APPEND bad "${entry}")
+  endif()
+endforeach()
+if(bad)
+  message(FATAL_ERROR "${BINARY} depends on libraries it must not use:\n${bad}")
+endif()
+message(STATUS "${BINARY}: ${n} shared libraries, none matching ${FORBIDDEN}")
