@@ -332,6 +332,10 @@ CalibrationResult Calibration::run() const {
   result.ratio = sbalc.ratio;
   result.noise_ratio = sbalc.noise_ratio;
   result.noise_standard_deviation = sbalc.noise_standard_deviation;
+  result.pool_ess = sbalc.pool_ess;
+  result.pool_ess_threshold = sbalc.pool_ess_threshold;
+  result.pool_relative_error = sbalc.pool_relative_error;
+  result.warnings = sbalc.warnings;
   result.history = sbalc.history;
   result.hyperparameters = sbalc.surrogate->hyperparameters();
   result.trend_used = sbalc.surrogate->trend_used();
@@ -367,6 +371,7 @@ CalibrationResult Calibration::run() const {
   result.ess_threshold = posterior.ess_threshold;
   result.poorly_resolved = posterior.poorly_resolved;
   result.warning = posterior.warning;
+  if (!posterior.warning.empty()) result.warnings.push_back("posterior: " + posterior.warning);
   result.elapsed = std::chrono::duration<double>(Clock::now() - start).count();
   return result;
 }

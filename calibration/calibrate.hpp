@@ -103,6 +103,9 @@ struct CalibrationResult {
   double ratio = 0.0;               // (c_upper − c_lower)/ĉ
   double noise_ratio = 0.0;         // the part of the ratio due to the log-likelihood noise
   double noise_standard_deviation = 0.0;  // τ of the GP nugget, log-likelihood units
+  double pool_ess = 0.0;                  // ESS of SBALC's pool (its stopping guard, sbalc.hpp)
+  double pool_ess_threshold = 0.0;
+  double pool_relative_error = 0.0;       // Monte Carlo error SE(ĉ)/ĉ of the pool
   std::vector<SbalcIteration> history;    // chosen points in u
   GaussianProcessHyperparameters hyperparameters;  // of the last GP (length scales in u)
   TrendType trend_used = TrendType::Constant;
@@ -132,6 +135,11 @@ struct CalibrationResult {
   double ess_threshold = 0.0;
   bool poorly_resolved = false;
   std::string warning;              // empty unless poorly_resolved
+
+  // Every warning of the result: SBALC's (sbalc.hpp: failed runs left out of the GP, the
+  // stopping guards that failed, why it did not converge), then the posterior's `warning`.
+  // Empty for a converged calibration with a well-resolved posterior.
+  std::vector<std::string> warnings;
 
   double elapsed = 0.0;             // [s]
 };

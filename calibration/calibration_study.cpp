@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -26,6 +27,13 @@ const char* const observations_signal_files = "calibration.observations.signal_f
 const char* const noise_kind = "calibration.noise.kind";
 const char* const noise_standard_deviations = "calibration.noise.standard_deviations";
 const char* const noise_discrepancy = "calibration.noise.discrepancy";
+
+// A default value as the schema shows it: 15 significant digits, no trailing zeros.
+std::string shortest(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.15g", value);
+  return text;
+}
 
 std::string trim(const std::string& text) {
   const auto first = text.find_first_not_of(" \t\r\n");
@@ -177,44 +185,67 @@ void declare_calibration_keys(fem::ConfigSchema& s) {
   s.string(std::string(noise_discrepancy) + "[].standard_deviation").default_value("")
       .doc("delta_j, e.g. '3 uohm' (a bare number is in the feature's SI unit), >= 0.");
 
+  // The defaults are simulator_sbalc_options() (sbalc.hpp, "Defaults"): the library's
+  // SbalcOptions{} with the adaptive pool, the estimated nugget and batches of 4.
+  const SbalcOptions defaults = simulator_sbalc_options();
   s.section("calibration.sbalc",
-            "Streamlined Bayesian active learning cubature of the evidence (Li et al. 2025) with a nugget.");
-  s.integer("calibration.sbalc.pool_size").default_value("20000").range(Range::closed(100, 10000000))
+            "Streamlined Bayesian active learning cubature of the evidence (Li et al. 2025) with a nugget. The "
+            "defaults are the paper's SBALC except pool: adaptive, nugget: estimated and batch_size: 4, chosen for "
+            "a noisy finite-element forward model run on parallel workers.");
+  s.integer("calibration.sbalc.pool_size").default_value(std::to_string(defaults.pool_size))
+      .range(Range::closed(100, 10000000))
       .doc("N_M prior samples for the evidence, its bounds, the learning function and the posterior (paper: 2e4).");
-  s.integer("calibration.sbalc.initial_points").default_value("5").range(Range::closed(2, 100000))
+  s.integer("calibration.sbalc.initial_points").default_value(std::to_string(defaults.n_initial))
+      .range(Range::closed(2, 100000))
       .doc("n_0 points of the initial Hammersley design (paper: 5).");
-  s.integer("calibration.sbalc.batch_size").default_value("4").range(Range::closed(1, 10000))
+  s.integer("calibration.sbalc.batch_size").default_value(std::to_string(defaults.batch_size))
+      .range(Range::closed(1, 10000))
       .doc("Points chosen per iteration (kriging believer) and evaluated in parallel; 1: the paper's sequential "
            "SBALC.");
-  s.integer("calibration.sbalc.max_evaluations").default_value("100").range(Range::closed(2, 1000000))
+  s.integer("calibration.sbalc.max_evaluations").default_value(std::to_string(defaults.max_evaluations))
+      .range(Range::closed(2, 1000000))
       .doc("Cap on forward-model runs, initial design and failed runs included; reaching it means not converged.");
-  s.number("calibration.sbalc.tolerance", "1", "1").default_value("0.1").range(Range::open_closed(0, 100))
-      .doc("Stop when (c_upper - c_lower)/c < tolerance on two consecutive iterations (paper: 0.1).");
-  s.choice("calibration.sbalc.nugget", {"off", "fixed", "estimated"}).default_value("estimated")
+  s.number("calibration.sbalc.tolerance", "1", "1").default_value(shortest(defaults.tolerance))
+      .range(Range::open_closed(0, 100))
+      .doc("Stop when (c_upper - c_lower)/c, the pool's Monte Carlo error included, is below the tolerance on two "
+           "consecutive iterations after the initial design (paper: 0.1), provided the pool's effective sample "
+           "size is at least max(100, 1 % of the pool) and the log-likelihood noise tau does not exceed the "
+           "spread of the evaluated log-likelihoods near their maximum; the noise allowance raises the tolerance "
+           "at most threefold. A calibration that stops otherwise is not converged and says why.");
+  s.choice("calibration.sbalc.nugget", {"off", "fixed", "estimated"})
+      .default_value(defaults.gp.nugget_mode == NuggetMode::Off     ? "off"
+                     : defaults.gp.nugget_mode == NuggetMode::Fixed ? "fixed"
+                                                                    : "estimated")
       .doc("Noise variance of the GP of the log-likelihood: off (interpolating, the paper's), fixed "
            "(nugget_standard_deviation) or estimated with the other hyperparameters (docs/CALIBRATION.md, "
            "'The nugget').");
   s.number("calibration.sbalc.nugget_standard_deviation", "1", "1").default_value("0.1")
       .range(Range::greater_than(0))
       .doc("fixed: the noise standard deviation tau of the log-likelihood, in log-likelihood units.");
-  s.integer("calibration.sbalc.seed").default_value("1").range(Range::closed(0, 1e9))
+  s.integer("calibration.sbalc.seed").default_value(std::to_string(defaults.seed)).range(Range::closed(0, 1e9))
       .doc("Seed of the prior pool and the GP restarts; the same seed replays the same sequence of runs.");
-  s.choice("calibration.sbalc.failed_runs", {"impute_minimum", "exclude"}).default_value("impute_minimum")
+  s.choice("calibration.sbalc.failed_runs", {"impute_minimum", "exclude"})
+      .default_value(defaults.failed_runs == FailedRunPolicy::exclude ? "exclude" : "impute_minimum")
       .doc("What the GP does with a failed run: impute_minimum enters it at the lowest log-likelihood of the "
            "successful runs so far (a region where the simulator fails, e.g. a melting electrode, is learnt as a "
            "region of poor fit and stops being proposed); exclude leaves it out (the evidence then rests on the "
            "successful runs only).");
-  s.number("calibration.sbalc.log_likelihood_range", "1", "1").default_value("50").range(Range::closed(0, 1e6))
+  s.number("calibration.sbalc.log_likelihood_range", "1", "1").default_value(shortest(defaults.log_likelihood_range))
+      .range(Range::closed(0, 1e6))
       .doc("The GP of the log-likelihood sees max(lnL, lnL_max - range): only the top of the log-likelihood "
            "matters for the evidence, and a GP asked to fit thousands of units of range chases the cliffs. 0: "
            "no floor (the paper's).");
-  s.choice("calibration.sbalc.pool", {"adaptive", "prior"}).default_value("adaptive")
+  s.choice("calibration.sbalc.pool", {"adaptive", "prior"}).default_value(defaults.adaptive_pool ? "adaptive" : "prior")
       .doc("prior: the paper's pool of prior samples throughout; adaptive: redrawn from a defensive mixture "
            "around the current posterior (importance-weighted) whenever its effective sample size falls below 2 % "
            "of the pool, so that a posterior much narrower than the prior is resolved.");
-  s.choice("calibration.sbalc.kernel", {"matern52", "squared_exponential"}).default_value("matern52")
+  s.choice("calibration.sbalc.kernel", {"matern52", "squared_exponential"})
+      .default_value(defaults.gp.kernel == KernelType::SquaredExponential ? "squared_exponential" : "matern52")
       .doc("Anisotropic GP kernel.");
-  s.choice("calibration.sbalc.trend", {"constant", "diagonal_quadratic", "full_quadratic"}).default_value("constant")
+  s.choice("calibration.sbalc.trend", {"constant", "diagonal_quadratic", "full_quadratic"})
+      .default_value(defaults.gp.trend == TrendType::Constant            ? "constant"
+                     : defaults.gp.trend == TrendType::DiagonalQuadratic ? "diagonal_quadratic"
+                                                                         : "full_quadratic")
       .doc("GP mean function; a quadratic suits a log-likelihood and is used once there are enough points.");
 
   s.section("calibration.posterior", "Sampling-importance-resampling of the prior pool (Smith & Gelfand 1992).");

@@ -7,18 +7,76 @@
 //     c = ∫ L(θ) f(θ) dθ = E_prior[exp ℒ(θ)]
 // is estimated from a GP surrogate of the log-likelihood ℒ (gaussian_process.hpp)
 // with latent mean m(θ) and latent standard deviation s(θ) after n evaluations:
-//     ĉ       = E_prior[exp(m)]              (paper eq. 9)
-//     c_upper = E_prior[exp(m + b s)],   c_lower = E_prior[exp(m − b s)],   b = 1,
-// each a Monte Carlo mean over a seeded pool of N_M prior samples (default 2·10⁴),
-// evaluated as log-sum-exp minus ln N_M, so nothing overflows however large |ℒ| is.
+//     ĉ          = E_prior[exp(m)]              (paper eq. 9)
+//     c_upper,GP = E_prior[exp(m + b s)],   c_lower,GP = E_prior[exp(m − b s)],   b = 1,
+// (the paper's bounds; the reported c_upper, c_lower also hold the pool's Monte Carlo
+// error, below), each a Monte Carlo mean over a seeded pool of N_M prior samples
+// (default 2·10⁴), evaluated as log-sum-exp minus ln N_M, so nothing overflows however
+// large |ℒ| is.
 // The next evaluation maximises over the pool the learning function (paper eq. 10)
 //     LF = s² (e^{m + b s} − e^{m − b s}),
 //     ln LF = 2 ln s + m + b s + ln(1 − e^{−2 b s})          (s > 0; LF = 0 at s = 0),
-// skipping pool points already chosen (evaluated or failed). Iterations stop when
-//     ratio = (c_upper − c_lower)/ĉ = e^{ln c_upper − ln ĉ} − e^{ln c_lower − ln ĉ}
-// is below the tolerance (0.1) on n_consecutive (2) consecutive iterations, or when the
-// evaluation cap is reached (result.converged = false). The initial design is n_0 = 5
-// Hammersley points kept off the faces of the box (calibration/designs.hpp).
+// skipping pool points already chosen (evaluated or failed).
+//
+// Monte Carlo error of the pool (our extension). Each pool average is an importance-
+// sampling estimate with a standard error of its own. For an average X = (1/N_M) Σ a_i,
+// a_i = r_i e^{v_i}, with normalised weights w_i = a_i / Σ_k a_k,
+//     SE(X)² = Σ_i (a_i − X)² / (N_M (N_M − 1)) = X² (N_M Σ_i w_i² − 1)/(N_M − 1),
+// so SE(X)/X = √((N_M/ESS − 1)/(N_M − 1)) ≈ √(1/ESS − 1/N_M), with the Kish effective
+// sample size ESS = 1/Σ w_i² of those weights (Owen 2013, "Monte Carlo theory, methods
+// and examples", §9.3). The GP bounds and the pool's error add in quadrature:
+//     c_upper = ĉ + √((c_upper,GP − ĉ)² + (b SE(c_upper,GP))²),
+//     c_lower = max(0, ĉ − √((ĉ − c_lower,GP)² + (b SE(c_lower,GP))²)),
+// where c_upper,GP = E_pool[e^{m + b s}] and c_lower,GP = E_pool[e^{m − b s}] are the
+// paper's bounds (eq. 9 with ±b s) and the SEs are theirs. (c_lower = 0 is reported as
+// ln c_lower = −∞.) The ratio below is formed from these bounds, so a pool too small to
+// resolve the posterior keeps them apart however well the GP has learnt ℒ; the relative
+// error of ĉ itself, SE(ĉ)/ĉ, is reported as pool_relative_error. With ESS = 400 the
+// pool alone contributes about 2b/√ESS = 0.1 to the ratio.
+//
+// Stopping rule. Iterations stop with converged = true when, on n_consecutive (2)
+// counted iterations in a row,
+//     ratio = (c_upper − c_lower)/ĉ < tolerance_used       (tolerance 0.1; see "Nugget")
+// and the guards below hold. An iteration is counted only if it comes after the initial
+// design and its GP holds more data than the previous iteration's (it added a run; an
+// iteration whose every new run failed and was excluded neither counts nor resets the
+// count). So the GP of the initial design alone never contributes, and convergence
+// always rests on at least n_consecutive GPs that include points chosen by SBALC.
+// Guards (each failing one refuses the iteration, resets the count and is recorded in
+// SbalcIteration::refusal; at the end they become the result's warnings):
+//   - Pool effective sample size: ESS of the weights w_i ∝ r_i e^{m_i} at least
+//     max(min_pool_ess, min_pool_ess_fraction · N_M) (defaults 100 and 1 %, the
+//     posterior's own threshold, posterior.hpp). Below it the evidence and the posterior
+//     rest on a handful of pool points, whose Monte Carlo error is itself poorly
+//     estimated (measured: a narrow likelihood in the prior's tail, ESS 1.7, ln ĉ 16
+//     units off while the ratio was below the tolerance).
+//   - Noise within the peak: with a nugget, τ must not exceed the peak spread S of the
+//     evaluated log-likelihoods near their maximum. The evaluations "near the maximum"
+//     are those inside the band ℒ_i ≥ ℒ_max − h_d, h_d = ½ χ²_d(0.99): for a Gaussian
+//     posterior this is the log-density drop that bounds its 99 % highest-posterior-
+//     density region (Wilson–Hilferty approximation of the χ² quantile, within 1 % for
+//     every d). With at least d + 1 evaluations in the band (a simplex, the fewest that
+//     locate a peak in d dimensions), S = ℒ_max − min_band ℒ_i, the spread they
+//     actually show; with fewer, the data do not resolve the peak's shape and S = h_d,
+//     the height of the band. Why this choice: the evidence is carried by the top h_d
+//     units of ℒ; a noise τ > S says that everything the evaluations show of the peak
+//     is within the noise, so the GP may treat the peak as noise and lower it (measured:
+//     τ = 6.4 against h_1 = 3.3 on the tail problem, ln ĉ ≈ −55 against −12.96 and a
+//     posterior equal to the prior). Then the noise allowance is not applied
+//     (tolerance_used = tolerance) and the iteration is refused. A noise τ ≤ tolerance/2
+//     passes whatever S is (S = 0 for a flat log-likelihood): a latent peak lowered by
+//     about τ changes ĉ by a factor of about e^τ, within the tolerance.
+//   - Noise allowance capped: tolerance_used ≤ max_noise_tolerance_factor · tolerance
+//     (default 3). A noise-limited ratio above the cap is refused with the value needed,
+//     so a result never claims convergence at many times the requested tolerance
+//     without the caller having asked for that tolerance.
+// When the evaluation cap is reached first (or no pool point is left), converged =
+// false. A result that is not converged always carries at least one warning (the reason
+// and what to do); SbalcResult::warnings holds them, in the order: failed runs left out
+// of the GP (failed_runs = exclude, converged or not), the guards that failed in the last
+// iteration, then the stop.
+// The initial design is n_0 = 5 Hammersley points kept off the faces of the box
+// (calibration/designs.hpp).
 //
 // Nugget extension (docs/CALIBRATION.md, "The nugget"). The FE log-likelihood carries reproducible
 // discretisation noise; an interpolating GP chases it, its s never shrinks between
@@ -36,7 +94,9 @@
 //     averaging over more nearby points reduces it, like τ·√(df/n)). With
 //         ratio_τ = (E[e^{m + b s_τ}] − E[e^{m − b s_τ}]) / ĉ,
 //     the noise-induced spread of the bounds, the stopping test is
-//         ratio < tolerance_used = √(tolerance² + ratio_τ²).
+//         ratio < tolerance_used = min(√(tolerance² + ratio_τ²), F · tolerance),
+//     F = max_noise_tolerance_factor, unless τ exceeds the peak spread S (guards above;
+//     then tolerance_used = tolerance).
 //     For small s the ratio is ≈ 2b E_post[s], and s² = s₀² + s_τ², so this asks the
 //     part of the spread due to gaps in the design, ≈ √(ratio² − ratio_τ²), to be below
 //     the tolerance, while the part caused by the noise is accepted and reported
@@ -95,6 +155,16 @@
 // whole range chases the cliffs and estimates a large noise. Δ = 50 by default; 0
 // disables the floor.
 //
+// Defaults. SbalcOptions{} is the paper's algorithm (prior pool, interpolating GP, one
+// point per iteration) with the guards above; it suits cheap, noise-free log-likelihoods
+// evaluated one at a time (the analytic problems of the tests). `rsw calibrate` uses
+// simulator_sbalc_options() instead (the defaults of a study's calibration.sbalc keys,
+// calibration_study.hpp), which differ on purpose in three places, for a finite-element
+// forward model: adaptive_pool = true (a likelihood from several replicates is much
+// narrower than the prior), gp.nugget_mode = Estimated (the FE log-likelihood carries
+// discretisation noise) and batch_size = 4 (runs go to parallel worker processes).
+// Everything else, including the guards and their thresholds, is the same.
+//
 // Deterministic for a fixed seed: pool, GP restarts and tie breaks derive from it.
 #pragma once
 
@@ -131,6 +201,9 @@ struct SbalcOptions {
   int max_evaluations = 100;      // cap on all evaluations, initial design and failures included
   int batch_size = 1;             // q points per iteration (kriging believer)
   bool noise_aware_tolerance = true;  // tolerance_used = √(tolerance² + ratio_τ²) (with a nugget)
+  double max_noise_tolerance_factor = 3.0;  // tolerance_used ≤ this · tolerance
+  double min_pool_ess = 100.0;              // convergence needs pool ESS ≥ max(min_pool_ess,
+  double min_pool_ess_fraction = 0.01;      //   min_pool_ess_fraction · pool_size)
   FailedRunPolicy failed_runs = FailedRunPolicy::impute_minimum;
   double log_likelihood_range = 50.0;         // Δ of the log-likelihood floor (0: none)
   bool adaptive_pool = false;                 // see "Adaptive pool" above
@@ -150,9 +223,17 @@ struct SbalcIteration {
   double log_evidence = 0.0;        // ln ĉ
   double log_evidence_upper = 0.0;  // ln c_upper
   double log_evidence_lower = 0.0;  // ln c_lower
-  double ratio = 0.0;               // (c_upper − c_lower)/ĉ
+  double ratio = 0.0;               // (c_upper − c_lower)/ĉ, the pool's Monte Carlo error included
+  double gp_ratio = 0.0;            // (c_upper,GP − c_lower,GP)/ĉ, the paper's ratio (GP only)
   double noise_ratio = 0.0;         // ratio_τ, the spread due to the noise (0 without nugget)
-  double tolerance_used = 0.0;      // √(tolerance² + ratio_τ²), or tolerance
+  double tolerance_used = 0.0;      // min(√(tolerance² + ratio_τ²), cap), or tolerance
+  double pool_relative_error = 0.0;  // SE(ĉ)/ĉ, the pool's Monte Carlo error
+  double peak_spread = 0.0;          // S, spread of the evaluated ℒ near their maximum
+  bool counted = false;              // counted towards n_consecutive (ratio below, guards held)
+  bool pool_ess_too_low = false;     // guard: pool_ess below the threshold
+  bool noise_exceeds_peak_spread = false;  // guard: τ > peak_spread (no noise allowance)
+  bool noise_allowance_capped = false;     // guard: ratio within √(tol² + ratio_τ²) but above the cap
+  std::string refusal;               // the guards that failed in this iteration, in words; empty if none
   GaussianProcessHyperparameters hyperparameters;
   double noise_standard_deviation = 0.0;  // τ, log-likelihood units
   double jitter = 0.0;
@@ -175,6 +256,11 @@ struct SbalcResult {
   double ratio = 0.0;
   double noise_ratio = 0.0;               // ratio_τ of the last GP
   double noise_standard_deviation = 0.0;  // τ of the last GP, log-likelihood units
+  double pool_ess = 0.0;                  // ESS of the last pool's posterior weights
+  double pool_ess_threshold = 0.0;        // max(min_pool_ess, min_pool_ess_fraction · pool_size)
+  double pool_relative_error = 0.0;       // SE(ĉ)/ĉ of the last pool
+  double peak_spread = 0.0;               // S of the last iteration
+  std::vector<std::string> warnings;      // what is wrong and what to do; at least one unless converged
   int n_evaluations = 0;                  // all, failed included
   Eigen::MatrixXd design;                 // successful points, rows in [0,1]^d
   Eigen::VectorXd log_likelihoods;        // ℒ at design rows
@@ -188,6 +274,14 @@ struct SbalcResult {
 
   double evidence() const;  // exp(log_evidence); may under/overflow, prefer the log
 };
+
+// The defaults of `rsw calibrate` (see "Defaults" above): SbalcOptions{} with
+// adaptive_pool = true, gp.nugget_mode = Estimated and batch_size = 4.
+SbalcOptions simulator_sbalc_options();
+
+// h_d = ½ χ²_d(0.99), the log-density drop bounding the 99 % highest-density region of
+// a d-dimensional Gaussian (Wilson–Hilferty); the band of the peak-spread guard.
+double peak_band_height(int dimension);
 
 class Sbalc {
  public:

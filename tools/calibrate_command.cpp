@@ -303,7 +303,8 @@ void write_posterior_csv(const fs::path& path, const cal::CalibrationResult& res
 const std::vector<std::string> diagnostics_columns = {
     "iteration", "n_points", "n_evaluations", "log_evidence", "log_evidence_lower", "log_evidence_upper", "ratio",
     "noise_ratio", "tolerance_used", "noise_standard_deviation", "signal_variance", "jitter",
-    "log_learning_function", "n_chosen", "n_imputed", "pool_ess"};
+    "log_learning_function", "n_chosen", "n_imputed", "pool_ess", "gp_ratio", "pool_relative_error", "peak_spread",
+    "counted"};
 
 Eigen::MatrixXd diagnostics_table(const cal::CalibrationResult& result) {
   const auto d = static_cast<Eigen::Index>(result.parameter_names.size());
@@ -316,7 +317,8 @@ Eigen::MatrixXd diagnostics_table(const cal::CalibrationResult& result) {
         it.n_points, it.n_evaluations, it.log_evidence, it.log_evidence_lower, it.log_evidence_upper, it.ratio,
         it.noise_ratio, it.tolerance_used, it.noise_standard_deviation, it.hyperparameters.signal_variance, it.jitter,
         it.chosen_points.rows() > 0 ? it.log_learning_function : std::numeric_limits<double>::quiet_NaN(),
-        static_cast<double>(it.chosen_points.rows()), static_cast<double>(it.n_imputed), it.pool_ess;
+        static_cast<double>(it.chosen_points.rows()), static_cast<double>(it.n_imputed), it.pool_ess, it.gp_ratio,
+        it.pool_relative_error, it.peak_spread, it.counted ? 1.0 : 0.0;
     for (Eigen::Index j = 0; j < d; ++j) {
       table(r, static_cast<Eigen::Index>(diagnostics_columns.size()) + j) =
           j < it.hyperparameters.length_scales.size() ? it.hyperparameters.length_scales[j]
@@ -340,7 +342,7 @@ void write_diagnostics_csv(const fs::path& path, const cal::CalibrationResult& r
   csv << "\n";
   for (Eigen::Index r = 0; r < table.rows(); ++r) {
     for (Eigen::Index c = 0; c < table.cols(); ++c) {
-      const bool count = c < 3 || c == static_cast<Eigen::Index>(diagnostics_columns.size()) - 1;
+      const bool count = c < 3;
       csv << (c ? "," : "") << (count ? std::to_string(static_cast<long long>(table(r, c))) : number_text(table(r, c)));
     }
     csv << "\n";
@@ -428,10 +430,18 @@ void write_h5(const fs::path& path, const cal::Study& study, const cal::Calibrat
   h5.set_attribute("/evidence", "noise_ratio", result.noise_ratio);
   h5.set_attribute("/evidence", "converged", result.converged ? 1.0 : 0.0);
   h5.set_attribute("/evidence", "stop_reason", result.stop_reason);
+  h5.set_attribute("/evidence", "pool_relative_error", result.pool_relative_error);
+  h5.set_attribute("/evidence", "pool_effective_sample_size", result.pool_ess);
+  h5.set_attribute("/evidence", "pool_ess_threshold", result.pool_ess_threshold);
+  h5.write_string("/evidence/warnings", Json(result.warnings).dump(1));
 
   // Diagnostics per iteration, and the points each iteration chose (physical θ).
   h5.write("/diagnostics/table", to_row_major(diagnostics_table(result)));
   h5.set_attribute("/diagnostics/table", "columns", Json(diagnostics_header(result)).dump());
+  Json refusals = Json::object();  // by iteration, the stopping guards that failed (sbalc.hpp)
+  for (std::size_t k = 0; k < result.history.size(); ++k)
+    if (!result.history[k].refusal.empty()) refusals[std::to_string(k)] = result.history[k].refusal;
+  h5.write_string("/diagnostics/refusals", refusals.dump(1));
   const auto d = static_cast<Eigen::Index>(result.parameter_names.size());
   std::vector<Eigen::VectorXd> chosen_rows;
   for (std::size_t k = 0; k < result.history.size(); ++k) {
@@ -580,15 +590,20 @@ void run_calibrate(const CalibrateOptions& options, const ForwardModelFactory& f
   Json summary = {
       {"study", study.name()},
       {"study_file", fs::absolute(study.file()).lexically_normal().string()},
+      {"warnings", result.warnings},
       {"converged", result.converged},
       {"stop_reason", result.stop_reason},
       {"evidence",
        {{"log_evidence", result.log_evidence},
-        {"log_evidence_lower", result.log_evidence_lower},
-        {"log_evidence_upper", result.log_evidence_upper},
-        {"ratio", result.ratio},
+        {"log_evidence_lower", finite_or_null(result.log_evidence_lower)},
+        {"log_evidence_upper", finite_or_null(result.log_evidence_upper)},
+        {"ratio", finite_or_null(result.ratio)},
         {"noise_ratio", result.noise_ratio},
-        {"tolerance", settings.sbalc.tolerance}}},
+        {"tolerance", settings.sbalc.tolerance},
+        {"tolerance_used", result.history.empty() ? settings.sbalc.tolerance : result.history.back().tolerance_used},
+        {"pool_relative_error", finite_or_null(result.pool_relative_error)},
+        {"pool_effective_sample_size", result.pool_ess},
+        {"pool_ess_threshold", result.pool_ess_threshold}}},
       {"n_evaluations", result.n_evaluations},
       {"n_reused", result.n_reused},
       {"n_failed", result.n_failed},
@@ -635,7 +650,9 @@ void run_calibrate(const CalibrateOptions& options, const ForwardModelFactory& f
   write_diagnostics_csv(files.diagnostics_csv, result);
   write_text(files.json, summary.dump(2) + "\n");
 
-  // Report.
+  // Report: the warnings first, before any "converged".
+  for (const auto& warning : result.warnings)
+    std::printf("calibration %s: warning: %s\n", study.name().c_str(), warning.c_str());
   std::printf("calibration %s: %s after %zu runs (%zu reused, %zu failed), %zu iterations, %s\n", study.name().c_str(),
               result.converged ? "converged" : "NOT converged", result.n_evaluations, result.n_reused,
               result.n_failed, result.history.size(), cal::format_duration(result.elapsed).c_str());
@@ -643,10 +660,11 @@ void run_calibrate(const CalibrateOptions& options, const ForwardModelFactory& f
   for (std::size_t r = 0; r < result.evaluations.size(); ++r)
     if (!result.evaluations[r].warnings.empty() && !result.evaluations[r].reused)
       std::printf("  run %zu warns: %s\n", r, result.evaluations[r].warnings.c_str());
-  std::printf("  evidence ln c = %.6g, bounds [%.6g, %.6g], ratio %.3g (noise part %.3g); log-likelihood noise "
-              "tau = %.3g\n",
-              result.log_evidence, result.log_evidence_lower, result.log_evidence_upper, result.ratio,
-              result.noise_ratio, result.noise_standard_deviation);
+  std::printf("  evidence ln c = %.6g, bounds [%.6g, %.6g] (pool Monte Carlo error %.2g %%, pool ESS %.1f), ratio "
+              "%.3g (noise part %.3g); log-likelihood noise tau = %.3g\n",
+              result.log_evidence, result.log_evidence_lower, result.log_evidence_upper,
+              100.0 * result.pool_relative_error, result.pool_ess, result.ratio, result.noise_ratio,
+              result.noise_standard_deviation);
   const int percent = static_cast<int>(std::lround(100 * result.credible_level));
   for (std::size_t i = 0; i < result.parameter_names.size(); ++i) {
     const auto ii = static_cast<Eigen::Index>(i);
@@ -657,7 +675,6 @@ void run_calibrate(const CalibrateOptions& options, const ForwardModelFactory& f
   }
   std::printf("  effective sample size %.1f of a pool of %lld\n", result.effective_sample_size,
               static_cast<long long>(result.pool.rows()));
-  if (!result.warning.empty()) std::printf("  warning: %s\n", result.warning.c_str());
   for (const auto& run : predictive) {
     if (run.status == "ok") std::printf("  predictive %s: %s\n", run.name.c_str(), run.signal_file.string().c_str());
     if (run.status == "failed") std::printf("  predictive %s failed: %s\n", run.name.c_str(), run.failure_reason.c_str());

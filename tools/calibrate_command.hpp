@@ -10,11 +10,15 @@
 //                             estimates, observations, every run
 //   <name>_posterior.csv      posterior draws, physical units
 //   <name>_diagnostics.csv    one row per SBALC iteration
-//   <name>_calibration.json   summary: evidence, convergence, runs, mean, MAP, credible
-//                             intervals, ESS, warning, predictive runs, file names
+//   <name>_calibration.json   summary: warnings, evidence, convergence, runs, mean, MAP,
+//                             credible intervals, ESS, predictive runs, file names
 //   <name>_calibration/       the evaluation cache (runs_NNNN.h5, one study results file
 //                             per batch), predictive.h5 and predictive/<run>/ (for the
 //                             weld: signals.csv, results.h5, summary.json)
+// The report on standard output starts with the result's warnings (SBALC's stopping
+// guards, why it did not converge, a poorly resolved posterior; calibrate.hpp), one line
+// each, before the line that says whether the calibration converged; the same warnings
+// are the summary's "warnings" list and /evidence/warnings of the HDF5 file.
 // tools/plot_calibration.py draws them. Input errors propagate as fem::ConfigError,
 // the rest as std::exception for main() to report.
 #pragma once

@@ -166,6 +166,8 @@ def plot_corner(name, summary, samples, truths, out_dir, dpi):
         name, samples.shape[0], summary.get("effective_sample_size", float("nan")), 100 * level)
     if summary.get("warning"):
         title += "\nwarning: poorly resolved (small effective sample size)"
+    if "converged" in summary and not summary["converged"]:
+        title += "\nNOT converged: %d warning(s) in the summary" % len(summary.get("warnings", []))
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     path = os.path.join(out_dir, "%s_corner.png" % name)
@@ -204,6 +206,10 @@ def plot_convergence(name, summary, table, columns, out_dir, dpi):
     shown = np.where(np.isfinite(ratio) & (ratio > 0), ratio, np.nan)
     ax_r.semilogy(n, shown, "o-", color="C1", markersize=3, label="(c_upper − c_lower) / ĉ")
     ax_r.semilogy(n, tolerance, "--", color="0.3", label="tolerance used")
+    if "gp_ratio" in column:  # the paper's ratio, without the pool's Monte Carlo error
+        gp = table[:, column["gp_ratio"]]
+        ax_r.semilogy(n, np.where(np.isfinite(gp) & (gp > 0), gp, np.nan), "-", color="C3", linewidth=0.8,
+                      label="GP part (without the pool's Monte Carlo error)")
     if "noise_ratio" in column:
         noise = table[:, column["noise_ratio"]]
         if np.any(noise > 0):

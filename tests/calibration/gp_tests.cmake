@@ -11,6 +11,8 @@ add_executable(test_calibration_gp
 target_link_libraries(test_calibration_gp PRIVATE rsw_calibration GTest::gtest_main)
 gtest_discover_tests(test_calibration_gp PROPERTIES LABELS unit DISCOVERY_TIMEOUT 60)
 
-add_executable(test_calibration_sbalc ${CMAKE_CURRENT_LIST_DIR}/test_sbalc.cpp)
+add_executable(test_calibration_sbalc
+  ${CMAKE_CURRENT_LIST_DIR}/test_sbalc.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/test_sbalc_guards.cpp)
 target_link_libraries(test_calibration_sbalc PRIVATE rsw_calibration GTest::gtest_main)
 gtest_discover_tests(test_calibration_sbalc PROPERTIES LABELS verification DISCOVERY_TIMEOUT 60)

@@ -305,6 +305,28 @@ TEST(Calibrate, KilledAndResumedCalibrationEqualsUninterruptedOne) {
   fs::remove_all(dir);
 }
 
+TEST(Calibrate, CalibrationStoppedAtTheCapCarriesSbalcsWarnings) {
+  const fs::path dir = fresh_dir("capped");
+  const LinearGaussianProblem problem;
+  const LinearModel model(problem.a, problem.b);
+  CalibrationOptions options = test_options(dir / "evaluations");
+  options.sbalc.max_evaluations = 8;  // the initial design and one batch: too few to converge
+  const CalibrationResult result = Calibration(model, problem.design(), problem.likelihood(), options).run();
+  EXPECT_FALSE(result.converged);
+  // SBALC's warnings first (ending with why it stopped), then the posterior's if any.
+  const std::size_t n_sbalc = result.warnings.size() - (result.poorly_resolved ? 1 : 0);
+  ASSERT_GE(n_sbalc, 1u);
+  EXPECT_NE(result.warnings[n_sbalc - 1].find("not converged: evaluation cap of 8 reached"), std::string::npos)
+      << result.warnings[n_sbalc - 1];
+  EXPECT_GT(result.pool_ess, 0.0);
+  EXPECT_DOUBLE_EQ(result.pool_ess_threshold, 200.0);  // max(100, 1 % of 20 000)
+  EXPECT_GT(result.pool_relative_error, 0.0);
+  if (result.poorly_resolved) {
+    EXPECT_EQ(result.warnings.back(), "posterior: " + result.warning);
+  }
+  fs::remove_all(dir);
+}
+
 TEST(Calibrate, ResumeRefusesRunsOfAnotherModelSetUp) {
   const fs::path dir = fresh_dir("other_model");
   const LinearGaussianProblem problem;
@@ -732,6 +754,43 @@ TEST(CalibrationStudy, DefaultsFollowThePaper) {
   EXPECT_EQ(settings.noise.kind, ObservationNoise::Kind::ReplicateScatter);
   EXPECT_DOUBLE_EQ(settings.posterior.credible_level, 0.9);
   EXPECT_EQ(settings.features_file, dir / "obs.csv");
+  fs::remove_all(dir);
+}
+
+// The study defaults are simulator_sbalc_options(): the library's SbalcOptions{} except
+// for the three documented differences (sbalc.hpp, "Defaults").
+TEST(CalibrationStudy, SbalcDefaultsAreTheLibrarysExceptTheDocumentedThree) {
+  const fs::path dir = fresh_dir("sbalc_defaults");
+  const Study study = Study::load(write_study(dir, "calibration: {observations: {features_file: obs.csv}}\n"));
+  const SbalcOptions read = read_calibration_settings(study).sbalc;
+  const SbalcOptions simulator = simulator_sbalc_options();
+  const SbalcOptions library;
+  EXPECT_TRUE(read.adaptive_pool);
+  EXPECT_EQ(read.gp.nugget_mode, NuggetMode::Estimated);
+  EXPECT_EQ(read.batch_size, 4);
+  EXPECT_FALSE(library.adaptive_pool);
+  EXPECT_EQ(library.gp.nugget_mode, NuggetMode::Off);
+  EXPECT_EQ(library.batch_size, 1);
+  for (const SbalcOptions* expected : {&simulator, &library}) {
+    EXPECT_EQ(read.pool_size, expected->pool_size);
+    EXPECT_EQ(read.n_initial, expected->n_initial);
+    EXPECT_EQ(read.seed, expected->seed);
+    EXPECT_EQ(read.max_evaluations, expected->max_evaluations);
+    EXPECT_DOUBLE_EQ(read.tolerance, expected->tolerance);
+    EXPECT_EQ(read.n_consecutive, expected->n_consecutive);
+    EXPECT_DOUBLE_EQ(read.bound_width, expected->bound_width);
+    EXPECT_EQ(read.failed_runs, expected->failed_runs);
+    EXPECT_DOUBLE_EQ(read.log_likelihood_range, expected->log_likelihood_range);
+    EXPECT_DOUBLE_EQ(read.min_pool_ess, expected->min_pool_ess);
+    EXPECT_DOUBLE_EQ(read.min_pool_ess_fraction, expected->min_pool_ess_fraction);
+    EXPECT_DOUBLE_EQ(read.max_noise_tolerance_factor, expected->max_noise_tolerance_factor);
+    EXPECT_EQ(read.noise_aware_tolerance, expected->noise_aware_tolerance);
+    EXPECT_EQ(read.gp.kernel, expected->gp.kernel);
+    EXPECT_EQ(read.gp.trend, expected->gp.trend);
+  }
+  EXPECT_EQ(read.adaptive_pool, simulator.adaptive_pool);
+  EXPECT_EQ(read.gp.nugget_mode, simulator.gp.nugget_mode);
+  EXPECT_EQ(read.batch_size, simulator.batch_size);
   fs::remove_all(dir);
 }
 

@@ -6,6 +6,8 @@
 //   - an existing calibration needs --resume; --resume reruns nothing and reproduces
 //     the files exactly; a calibration stopped by SIGTERM mid-batch resumes without
 //     repeating finished runs and ends like an uninterrupted one;
+//   - the warnings of a calibration (why it did not converge) come before the line that
+//     says whether it converged, and into the summary;
 //   - a bad observation file exits with code 2 naming the study key, file and line;
 //   - the twin-experiment studies load (`study show`);
 //   - the plot script draws the corner plot, the convergence history and the
@@ -75,7 +77,7 @@ std::string read_file(const fs::path& path) {
 // parameters on [0, 1], observed three times near θ = (0.3, 0.6) (y = 2.28442,
 // 2.53813), with σ = 0.05 per feature.
 fs::path write_calibration_study(const fs::path& dir, const std::string& name, const std::string& case_text,
-                                 int batch_size = 3) {
+                                 int batch_size = 3, int max_evaluations = 60) {
   write_file(dir / "case.yaml", case_text);
   write_file(dir / "observed.csv", "# y at (0.3, 0.6) plus noise\nR_beta, dS_P\n2.29, 2.53\n2.28, 2.55\n2.30, 2.52\n");
   return write_file(dir / (name + ".yaml"), "study: {name: " + name + R"(}
@@ -89,7 +91,8 @@ calibration:
   noise:
     kind: standard_deviations
     standard_deviations: [{feature: R_beta, value: 0.05}, {feature: dS_P, value: 0.05}]
-  sbalc: {batch_size: )" + std::to_string(batch_size) + R"(, max_evaluations: 60}
+  sbalc: {batch_size: )" + std::to_string(batch_size) + R"(, max_evaluations: )" +
+                                                         std::to_string(max_evaluations) + R"(}
   posterior: {n_samples: 1000, n_predictive: 2}
 )");
 }
@@ -133,6 +136,10 @@ TEST(CalibrateCli, WritesEveryFileAndResumesIdentically) {
   EXPECT_DOUBLE_EQ(json["credible_level"].get<double>(), 0.9);
   EXPECT_GT(json["effective_sample_size"].get<double>(), 0.0);
   EXPECT_TRUE(json["warning"].is_string());
+  ASSERT_TRUE(json["warnings"].is_array());
+  EXPECT_EQ(json["warnings"].empty(), json["warning"].get<std::string>().empty()) << json["warnings"].dump(1);
+  EXPECT_GT(json["evidence"]["pool_effective_sample_size"].get<double>(), 0.0);
+  EXPECT_TRUE(json["evidence"]["pool_relative_error"].is_number());
   EXPECT_EQ(json["noise"]["kind"], "standard_deviations");
   EXPECT_DOUBLE_EQ(json["noise"]["features"][0]["measurement_standard_deviation"].get<double>(), 0.05);
   ASSERT_EQ(json["predictive"].size(), 3u);  // the posterior mean and two samples
@@ -149,7 +156,8 @@ TEST(CalibrateCli, WritesEveryFileAndResumesIdentically) {
   const std::string diagnostics = read_file(out / "smooth_diagnostics.csv");
   EXPECT_EQ(diagnostics.rfind("iteration,n_points,n_evaluations,log_evidence,log_evidence_lower,log_evidence_upper,"
                               "ratio,noise_ratio,tolerance_used,noise_standard_deviation,signal_variance,jitter,"
-                              "log_learning_function,n_chosen,n_imputed,pool_ess,length_scale:a,length_scale:b\n0,5,5,",
+                              "log_learning_function,n_chosen,n_imputed,pool_ess,gp_ratio,pool_relative_error,"
+                              "peak_spread,counted,length_scale:a,length_scale:b\n0,5,5,",
                               0),
             0u)
       << diagnostics.substr(0, 300);
@@ -227,6 +235,30 @@ TEST(CalibrateCli, TerminatedCalibrationResumesWithoutRepeatingRuns) {
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_EQ(read_file(stopped / "slow_posterior.csv"), read_file(whole / "slow_posterior.csv"));
   EXPECT_EQ(read_file(stopped / "slow_diagnostics.csv"), read_file(whole / "slow_diagnostics.csv"));
+  fs::remove_all(dir);
+}
+
+// A calibration that does not converge says why before it says "NOT converged", and
+// the summary lists the same warnings.
+TEST(CalibrateCli, WarningsArePrintedBeforeTheConvergenceLineAndWritten) {
+  const fs::path dir = fresh_dir("warnings");
+  const fs::path study = write_calibration_study(dir, "capped", "analytic: {function: smooth}\n", 3, 8);
+  const fs::path out = dir / "out";
+  const CommandResult r = run_rsw("calibrate " + study.string() + " --no-plots -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  const std::size_t warning = r.output.find("calibration capped: warning: not converged: evaluation cap of 8 reached");
+  const std::size_t verdict = r.output.find("calibration capped: NOT converged after 8 runs");
+  ASSERT_NE(warning, std::string::npos) << r.output;
+  ASSERT_NE(verdict, std::string::npos) << r.output;
+  EXPECT_LT(warning, verdict) << r.output;
+  EXPECT_EQ(r.output.find("calibration capped: converged"), std::string::npos) << r.output;
+  const auto json = nlohmann::json::parse(read_file(out / "capped_calibration.json"));
+  EXPECT_FALSE(json["converged"].get<bool>());
+  ASSERT_TRUE(json["warnings"].is_array());
+  bool listed = false;
+  for (const auto& w : json["warnings"])
+    listed = listed || w.get<std::string>().rfind("not converged: evaluation cap of 8 reached", 0) == 0;
+  EXPECT_TRUE(listed) << json["warnings"].dump(1);
   fs::remove_all(dir);
 }
 
