@@ -8,6 +8,10 @@
 # The study and farm files read and write through fem/config.hpp and fem/hdf5_file.hpp.
 set(RSW_CALIBRATION_FARM_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/farm.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/farm_protocol.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/worker_pool.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/mpi_ranks.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/study_results_file.cpp
   ${CMAKE_CURRENT_LIST_DIR}/study.cpp
   ${CMAKE_CURRENT_LIST_DIR}/sensitivity.cpp
   ${CMAKE_CURRENT_LIST_DIR}/calibration_study.cpp
@@ -21,7 +25,7 @@ endif()
 if(RSW_WITH_MPI AND MPI_CXX_FOUND)
   message(STATUS "rsw: evaluation farm with MPI ${MPI_CXX_VERSION}")
   list(APPEND RSW_CALIBRATION_FARM_LIBS MPI::MPI_CXX)
-  set_source_files_properties(${CMAKE_CURRENT_LIST_DIR}/farm.cpp
+  set_source_files_properties(${CMAKE_CURRENT_LIST_DIR}/mpi_ranks.cpp
     PROPERTIES COMPILE_DEFINITIONS RSW_HAVE_MPI=1)
 else()
   message(STATUS "rsw: evaluation farm without MPI (install libopenmpi-dev for mpirun studies)")
