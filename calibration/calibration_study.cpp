@@ -1,6 +1,7 @@
 // The calibration section of a study file, the observation files and the likelihood
 // built from them; see calibration_study.hpp.
 #include "calibration/calibration_study.hpp"
+#include "fem/text.hpp"
 
 #include "calibration/signal.hpp"
 
@@ -17,6 +18,10 @@
 
 namespace rsw::calibration {
 namespace {
+
+using fem::lower;
+using fem::parse_number;
+using fem::trim;
 
 namespace fs = std::filesystem;
 using fem::Config;
@@ -35,34 +40,8 @@ std::string shortest(double value) {
   return text;
 }
 
-std::string trim(const std::string& text) {
-  const auto first = text.find_first_not_of(" \t\r\n");
-  if (first == std::string::npos) return "";
-  const auto last = text.find_last_not_of(" \t\r\n");
-  return text.substr(first, last - first + 1);
-}
 
-std::vector<std::string> split_commas(const std::string& line) {
-  std::vector<std::string> fields;
-  std::size_t start = 0;
-  while (true) {
-    const auto comma = line.find(',', start);
-    fields.push_back(trim(line.substr(start, comma == std::string::npos ? std::string::npos : comma - start)));
-    if (comma == std::string::npos) break;
-    start = comma + 1;
-  }
-  return fields;
-}
 
-// Locale-independent parse of a whole field; false unless it is one finite number.
-bool parse_number(const std::string& field, double& value) {
-  const char* first = field.data();
-  const char* last = field.data() + field.size();
-  if (first != last && *first == '+') ++first;
-  if (first == last) return false;
-  const auto [end, error] = std::from_chars(first, last, value);
-  return error == std::errc() && end == last && std::isfinite(value);
-}
 
 std::string join_names(const std::vector<std::string>& names) {
   std::string text;
@@ -378,7 +357,7 @@ Observations read_features_file(const fs::path& file, const std::vector<std::str
     ++line_number;
     const std::string text = trim(line);
     if (text.empty() || text[0] == '#') continue;
-    const std::vector<std::string> fields = split_commas(text);
+    const std::vector<std::string> fields = fem::split_fields(text);
     const std::string where = name + ":" + std::to_string(line_number) + ": ";
 
     if (columns.empty()) {

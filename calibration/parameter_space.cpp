@@ -9,6 +9,20 @@
 #include <stdexcept>
 
 namespace rsw::calibration {
+
+const char* prior_kind_name(PriorKind kind) {
+  switch (kind) {
+    case PriorKind::uniform:
+      return "uniform";
+    case PriorKind::log10_uniform:
+      return "log10_uniform";
+    case PriorKind::normal:
+      return "normal";
+    case PriorKind::truncated_normal:
+      return "truncated_normal";
+  }
+  return "unknown";
+}
 namespace {
 
 constexpr double infinity = std::numeric_limits<double>::infinity();

@@ -32,6 +32,9 @@ namespace rsw::calibration {
 enum class StandardSpace { unit_interval, standard_normal };
 
 enum class PriorKind { uniform, log10_uniform, normal, truncated_normal };
+// The name of a prior kind in study files and result files ("uniform", "log10_uniform",
+// "normal", "truncated_normal").
+const char* prior_kind_name(PriorKind kind);
 
 double standard_normal_cdf(double z);
 // Φ⁻¹(p) for p ∈ (0, 1); ±∞ at p = 0, 1; throws std::invalid_argument outside [0, 1].

@@ -1,6 +1,7 @@
 // Signals, uniform resampling, Savitzky–Golay smoothing, the Hermite curve through the
 // smoothed samples and the CSV reader; see signal.hpp for the definitions.
 #include "calibration/signal.hpp"
+#include "fem/text.hpp"
 
 #include "fem/units.hpp"
 
@@ -17,6 +18,10 @@
 namespace rsw::calibration {
 namespace {
 
+using fem::lower;
+using fem::parse_number;
+using fem::trim;
+
 std::string format_number(double value) {
   std::ostringstream out;
   out.precision(10);
@@ -24,40 +29,9 @@ std::string format_number(double value) {
   return out.str();
 }
 
-std::string trim(const std::string& text) {
-  const auto first = text.find_first_not_of(" \t\r\n");
-  if (first == std::string::npos) return "";
-  const auto last = text.find_last_not_of(" \t\r\n");
-  return text.substr(first, last - first + 1);
-}
 
-std::string lower(std::string text) {
-  for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return text;
-}
 
-std::vector<std::string> split_commas(const std::string& line) {
-  std::vector<std::string> fields;
-  std::size_t start = 0;
-  while (true) {
-    const auto comma = line.find(',', start);
-    fields.push_back(trim(line.substr(start, comma == std::string::npos ? std::string::npos
-                                                                        : comma - start)));
-    if (comma == std::string::npos) break;
-    start = comma + 1;
-  }
-  return fields;
-}
 
-// Locale-independent parse of a whole field; false if it is not one finite number.
-bool parse_number(const std::string& field, double& value) {
-  const char* first = field.data();
-  const char* last = field.data() + field.size();
-  if (first != last && *first == '+') ++first;
-  if (first == last) return false;
-  const auto [end, error] = std::from_chars(first, last, value);
-  return error == std::errc() && end == last && std::isfinite(value);
-}
 
 // Real roots of a x² + b x + c = 0 (one root when the quadratic term is negligible on
 // an interval of length `scale`).
@@ -454,7 +428,7 @@ Signal read_signal_csv(const std::string& path) {
     ++line_number;
     const std::string text = trim(line);
     if (text.empty() || text[0] == '#') continue;
-    const std::vector<std::string> fields = split_commas(text);
+    const std::vector<std::string> fields = fem::split_fields(text);
 
     if (columns.empty()) {
       for (std::size_t i = 0; i < fields.size(); ++i) {

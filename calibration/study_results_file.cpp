@@ -46,19 +46,6 @@ std::string warnings_path(std::size_t index) {
   return name.str();
 }
 
-const char* prior_kind_name(PriorKind kind) {
-  switch (kind) {
-    case PriorKind::uniform:
-      return "uniform";
-    case PriorKind::log10_uniform:
-      return "log10_uniform";
-    case PriorKind::normal:
-      return "normal";
-    case PriorKind::truncated_normal:
-      return "truncated_normal";
-  }
-  return "unknown";
-}
 
 Json finite_or_null(double value) { return std::isfinite(value) ? Json(value) : Json(nullptr); }
 

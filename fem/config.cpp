@@ -4,6 +4,7 @@
 // Loading works on a copy of the values and swaps it in at the end, so a Config
 // that rejected a file or an override still holds its previous, valid values.
 #include "fem/config.hpp"
+#include "fem/text.hpp"
 
 #include "fem/units.hpp"
 
@@ -26,12 +27,6 @@
 namespace rsw::fem {
 namespace {
 
-std::string trim(const std::string& text) {
-  const auto first = text.find_first_not_of(" \t\r\n");
-  if (first == std::string::npos) return "";
-  const auto last = text.find_last_not_of(" \t\r\n");
-  return text.substr(first, last - first + 1);
-}
 
 bool starts_with(const std::string& text, const std::string& prefix) {
   return text.compare(0, prefix.size(), prefix) == 0;

@@ -5,6 +5,7 @@
 // process-wide variable, so every call into the library holds one mutex. Config
 // files hold a few hundred values at most; the lock costs nothing noticeable.
 #include "fem/units.hpp"
+#include "fem/text.hpp"
 
 #include <udunits2.h>
 
@@ -53,12 +54,6 @@ UnitSystem& unit_system() {
 
 using UnitPtr = std::unique_ptr<ut_unit, decltype(&ut_free)>;
 
-std::string trim(const std::string& text) {
-  const auto first = text.find_first_not_of(" \t\r\n");
-  if (first == std::string::npos) return "";
-  const auto last = text.find_last_not_of(" \t\r\n");
-  return text.substr(first, last - first + 1);
-}
 
 bool is_word_char(char c) {
   return std::isalpha(static_cast<unsigned char>(c)) != 0 || c == '_';

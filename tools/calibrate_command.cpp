@@ -98,20 +98,6 @@ fem::RowMajorMatrix to_row_major(const Eigen::MatrixXd& matrix) {
   return out;
 }
 
-const char* prior_kind_name(cal::PriorKind kind) {
-  switch (kind) {
-    case cal::PriorKind::uniform:
-      return "uniform";
-    case cal::PriorKind::log10_uniform:
-      return "log10_uniform";
-    case cal::PriorKind::normal:
-      return "normal";
-    case cal::PriorKind::truncated_normal:
-      return "truncated_normal";
-  }
-  return "unknown";
-}
-
 const char* kernel_name(cal::KernelType kernel) {
   return kernel == cal::KernelType::SquaredExponential ? "squared_exponential" : "matern52";
 }
