@@ -536,8 +536,7 @@ void run_calibrate(const CalibrateOptions& options, const ForwardModelFactory& f
   const cal::CalibrationSettings settings = cal::read_calibration_settings(study);
   const cal::Observations observations = cal::load_observations(study, settings);
   const cal::GaussianLikelihood likelihood = cal::make_likelihood(study, settings, observations);
-  const std::unique_ptr<cal::ForwardModel> model = factory(study);
-  if (!model) throw std::runtime_error("study '" + study.name() + "': no forward model");
+  const std::unique_ptr<cal::ForwardModel> model = make_forward_model(study, factory);
 
   const fs::path output = study.output_folder();
   const fs::path calibration_folder = output / (study.name() + "_calibration");
