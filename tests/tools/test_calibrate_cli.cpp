@@ -12,7 +12,8 @@
 //   - a calibration can start from the runs of an earlier `rsw study run`
 //     (calibration.initial_runs): they are its first GP's data, none is run again, θ is
 //     mapped into the unit cube through the calibration's priors, runs outside a
-//     narrower prior are skipped with a note, and runs of another set-up are refused;
+//     narrower prior are skipped with a note, runs of another set-up are refused, and
+//     --resume replays such a calibration exactly;
 //   - the twin-experiment studies load (`study show`);
 //   - the plot script draws the corner plot, the convergence history and the
 //     predictive overlay.
@@ -416,6 +417,16 @@ TEST(CalibrateCli, StartsFromTheRunsOfAnEarlierStudy) {
   EXPECT_EQ(n_run, static_cast<std::size_t>(n_evaluations - 12));
   EXPECT_EQ(rsw::calibration::read_study_results(out / "sens_calibration/evaluations/runs_0000.h5").n_points(), 3u)
       << "the first file holds SBALC's first batch";
+
+  // --resume replays it: the study's runs again from the study, the rest from the cache.
+  const std::string posterior = read_file(out / "sens_posterior.csv");
+  r = run_rsw("calibrate " + study.string() + " -q --no-plots --resume -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("after " + std::to_string(n_evaluations) + " runs (12 from the study, " +
+                          std::to_string(n_evaluations - 12) + " reused, "),
+            std::string::npos)
+      << r.output;
+  EXPECT_EQ(read_file(out / "sens_posterior.csv"), posterior);
   fs::remove_all(dir);
 }
 
