@@ -2,7 +2,12 @@
 // evaluation cache, then the SIR posterior in physical units; see calibrate.hpp.
 #include "calibration/calibrate.hpp"
 
+#include "calibration/designs.hpp"
 #include "calibration/features.hpp"
+
+#include "fem/hdf5_file.hpp"
+
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -13,6 +18,7 @@
 #include <optional>
 #include <ostream>
 #include <regex>
+#include <set>
 #include <sstream>
 #include <utility>
 
@@ -33,13 +39,15 @@ struct AbortCalibration {
   bool interrupted = false;
 };
 
-// A finished run found in the evaluation folder.
+// A finished run found in the evaluation folder, or an initial run of a study.
 struct CachedRun {
   bool ok = false;
   Eigen::VectorXd features;
   std::string failure_reason;
   std::string warnings;
   double wall_time = 0.0;
+  bool from_study = false;
+  Eigen::VectorXd theta;  // initial runs: θ as the study stored it
 };
 
 using ThetaKey = std::vector<double>;
@@ -104,6 +112,12 @@ std::string undefined_features_reason(const std::vector<std::string>& names, con
   return reason;
 }
 
+std::string join_names(const std::vector<std::string>& names) {
+  std::string text;
+  for (const auto& name : names) text += (text.empty() ? "" : ", ") + name;
+  return text;
+}
+
 // u → θ for the rows of a matrix.
 Eigen::MatrixXd rows_to_physical(const ParameterSpace& parameters, const Eigen::MatrixXd& unit_points) {
   Eigen::MatrixXd physical(unit_points.rows(), unit_points.cols());
@@ -126,6 +140,135 @@ Eigen::VectorXd unit_to_physical(const ParameterSpace& parameters, const Eigen::
   return parameters.to_physical(parameters.unit_to_standard(clamped));
 }
 
+InitialRuns read_initial_runs(const fs::path& results_file, const StudyDesign& design) {
+  InitialRuns initial;
+  initial.file = results_file;
+  const std::string prefix = "study results file '" + results_file.string() + "' ";
+  StudyResults stored;
+  try {
+    stored = read_study_results(results_file);
+  } catch (const FarmError& e) {
+    throw CalibrationError(e.what());
+  }
+  const ParameterSpace& space = design.parameters;
+  if (stored.parameter_names != space.names()) {
+    throw CalibrationError(prefix + "has the parameters (" + join_names(stored.parameter_names) +
+                           "), the calibration (" + join_names(space.names()) +
+                           "); allowed: runs of the same parameters in the same order");
+  }
+  for (std::size_t j = 0; j < space.n_parameters(); ++j) {
+    const Parameter& p = space.parameter(j);
+    const std::string key = j < stored.parameter_config_keys.size() ? stored.parameter_config_keys[j] : "?";
+    const std::string unit = j < stored.parameter_units.size() ? stored.parameter_units[j] : "?";
+    if (key != p.config_key || unit != p.unit) {
+      throw CalibrationError(prefix + "sets parameter '" + p.name + "' as " + key + " [" + unit +
+                             "], the calibration as " + p.config_key + " [" + p.unit +
+                             "]; allowed: the same config key and unit");
+    }
+  }
+  if (stored.model != design.model) {
+    throw CalibrationError(prefix + "holds runs of another forward model set-up: '" + stored.model +
+                           "', the calibration's is '" + design.model +
+                           "' (the weld case, its overrides or the command's script differ)");
+  }
+  std::vector<Eigen::Index> columns;
+  std::vector<std::string> missing;
+  for (const auto& name : design.feature_names) {
+    const auto found = std::find(stored.feature_names.begin(), stored.feature_names.end(), name);
+    if (found == stored.feature_names.end()) {
+      missing.push_back(name);
+    } else {
+      columns.push_back(static_cast<Eigen::Index>(found - stored.feature_names.begin()));
+    }
+  }
+  if (!missing.empty()) {
+    throw CalibrationError(prefix + "has no feature " + join_names(missing) + " (it has " +
+                           join_names(stored.feature_names) + "); allowed: runs that computed every feature of "
+                           "the calibration");
+  }
+
+  // Priors that differ from the study's (the file describes them in /metadata/parameters).
+  try {
+    const fem::Hdf5File h5(results_file, fem::Hdf5Mode::read);
+    const auto list = nlohmann::json::parse(h5.read_string("/metadata/parameters"));
+    for (std::size_t j = 0; j < space.n_parameters() && j < list.size(); ++j) {
+      const std::string theirs = list[j].value("description", "");
+      const std::string ours = space.parameter(j).prior.describe();
+      if (!theirs.empty() && theirs != ours) {
+        initial.notes.push_back("the prior of " + space.parameter(j).name + " is " + ours + " here, " + theirs +
+                                " in the study");
+      }
+    }
+  } catch (const std::exception&) {
+    // Descriptions are informative only.
+  }
+
+  std::size_t n_pending = 0, n_repeated = 0;
+  std::vector<std::size_t> n_outside(space.n_parameters(), 0);
+  std::size_t n_outside_total = 0;
+  std::set<ThetaKey> seen;
+  for (std::size_t i = 0; i < stored.n_points(); ++i) {
+    const auto ii = static_cast<Eigen::Index>(i);
+    if (stored.status[i] == StudyResults::Status::pending) {
+      ++n_pending;
+      continue;
+    }
+    const Eigen::VectorXd theta = stored.points.row(ii).transpose();
+    bool inside = true;
+    for (std::size_t j = 0; j < space.n_parameters(); ++j) {
+      const Prior& prior = space.parameter(j).prior;
+      const double x = theta[static_cast<Eigen::Index>(j)];
+      if (!(x >= prior.lower() && x <= prior.upper())) {
+        if (inside) ++n_outside[j];
+        inside = false;
+      }
+    }
+    if (!inside) {
+      ++n_outside_total;
+      continue;
+    }
+    if (!seen.insert(key_of(theta)).second) {
+      ++n_repeated;
+      continue;
+    }
+    InitialRun run;
+    run.index = i;
+    run.theta = theta;
+    run.ok = stored.status[i] == StudyResults::Status::ok;
+    run.features.resize(static_cast<Eigen::Index>(columns.size()));
+    for (std::size_t k = 0; k < columns.size(); ++k)
+      run.features[static_cast<Eigen::Index>(k)] = stored.features(ii, columns[k]);
+    run.failure_reason = stored.failure_reasons[i];
+    run.warnings = stored.warnings[i];
+    run.wall_time = stored.wall_time[ii];
+    initial.runs.push_back(std::move(run));
+  }
+  if (n_pending > 0) {
+    initial.notes.push_back(std::to_string(n_pending) + " of the study's " + std::to_string(stored.n_points()) +
+                            " runs not finished, skipped (finish them with rsw study run --resume)");
+  }
+  if (n_outside_total > 0) {
+    std::string which;
+    for (std::size_t j = 0; j < space.n_parameters(); ++j) {
+      if (n_outside[j] == 0) continue;
+      const Parameter& p = space.parameter(j);
+      which += (which.empty() ? "" : ", ") + std::to_string(n_outside[j]) + " with " + p.name + " outside " +
+               p.prior.describe();
+    }
+    initial.notes.push_back(std::to_string(n_outside_total) + " runs outside the calibration's prior box skipped (" +
+                            which + ")");
+  }
+  if (n_repeated > 0) {
+    initial.notes.push_back(std::to_string(n_repeated) + " runs repeat the θ of an earlier run, skipped");
+  }
+  if (initial.runs.empty()) {
+    std::string why;
+    for (const auto& note : initial.notes) why += "; " + note;
+    throw CalibrationError(prefix + "has no usable run (of " + std::to_string(stored.n_points()) + why + ")");
+  }
+  return initial;
+}
+
 Calibration::Calibration(const ForwardModel& model, StudyDesign design, GaussianLikelihood likelihood,
                          CalibrationOptions options)
     : model_(model), design_(std::move(design)), likelihood_(std::move(likelihood)), options_(std::move(options)) {
@@ -138,6 +281,14 @@ Calibration::Calibration(const ForwardModel& model, StudyDesign design, Gaussian
                            ") differ from the model's (" + modelled + ")");
   }
   if (options_.evaluations_folder.empty()) throw CalibrationError("calibration: no evaluation folder");
+  const std::size_t n_initial_runs = options_.initial_runs.runs.size();
+  const auto n_design = static_cast<int>(std::max<std::size_t>(n_initial_runs, static_cast<std::size_t>(std::max(options_.sbalc.n_initial, 0))));
+  if (n_initial_runs > 0 && n_design >= options_.sbalc.max_evaluations) {
+    throw CalibrationError("calibration '" + design_.name + "': the initial design holds " + std::to_string(n_design) +
+                           " runs (" + std::to_string(n_initial_runs) + " of " + options_.initial_runs.file.string() +
+                           "), the evaluation cap is " + std::to_string(options_.sbalc.max_evaluations) +
+                           "; allowed: a cap above the initial design");
+  }
 }
 
 CalibrationResult Calibration::run() const {
@@ -181,6 +332,26 @@ CalibrationResult Calibration::run() const {
     }
   }
 
+  // Runs of an earlier study: the initial design in u (u_i = F_i(θ_i)), filled up with
+  // Hammersley points to n_initial; SBALC finds them in the cache.
+  SbalcOptions sbalc_options = options_.sbalc;
+  if (!options_.initial_runs.runs.empty()) {
+    const std::vector<InitialRun>& runs = options_.initial_runs.runs;
+    const auto n_runs = static_cast<Eigen::Index>(runs.size());
+    const Eigen::Index n_fill = std::max<Eigen::Index>(0, sbalc_options.n_initial - n_runs);
+    Eigen::MatrixXd initial(n_runs + n_fill, static_cast<Eigen::Index>(d));
+    for (Eigen::Index r = 0; r < n_runs; ++r) {
+      const InitialRun& run = runs[static_cast<std::size_t>(r)];
+      for (std::size_t j = 0; j < d; ++j) {
+        initial(r, static_cast<Eigen::Index>(j)) = parameters.parameter(j).prior.cdf(run.theta[static_cast<Eigen::Index>(j)]);
+      }
+      CachedRun cached{run.ok, run.features, run.failure_reason, run.warnings, run.wall_time, true, run.theta};
+      cache.insert_or_assign(key_of(unit_to_physical(parameters, initial.row(r).transpose())), std::move(cached));
+    }
+    if (n_fill > 0) initial.bottomRows(n_fill) = hammersley(static_cast<std::size_t>(n_fill), d);
+    sbalc_options.initial_design = initial;
+  }
+
   CalibrationResult result;
   result.parameter_names = parameters.names();
   for (std::size_t i = 0; i < d; ++i) result.parameter_units.push_back(parameters.parameter(i).unit);
@@ -205,7 +376,9 @@ CalibrationResult Calibration::run() const {
         missing.push_back(k);
         continue;
       }
-      run.reused = true;
+      run.reused = !cached->second.from_study;
+      run.from_study = cached->second.from_study;
+      if (run.from_study) run.theta = cached->second.theta;
       run.ok = cached->second.ok;
       run.features = cached->second.features;
       run.failure_reason = cached->second.failure_reason;
@@ -250,7 +423,7 @@ CalibrationResult Calibration::run() const {
         run.warnings = stored.warnings[m];
         run.wall_time = stored.wall_time[static_cast<Eigen::Index>(m)];
         cache.emplace(key_of(run.theta),
-                      CachedRun{run.ok, run.features, run.failure_reason, run.warnings, run.wall_time});
+                      CachedRun{run.ok, run.features, run.failure_reason, run.warnings, run.wall_time, false, {}});
       }
     }
 
@@ -286,16 +459,20 @@ CalibrationResult Calibration::run() const {
         ++n_failed;
       }
       if (run.reused) ++result.n_reused;
+      if (run.from_study) ++result.n_from_study;
       result.evaluations.push_back(run);
     }
     result.n_failed += n_failed;
     if (options_.progress != nullptr) {
       const std::size_t n_new = missing.size();
+      const auto n_study = static_cast<std::size_t>(
+          std::count_if(runs.begin(), runs.end(), [](const CalibrationEvaluation& run) { return run.from_study; }));
       std::ostream& out = *options_.progress;
       out << "calibration " << design_.name << ": batch " << batch << ", " << runs.size() << " run"
           << (runs.size() == 1 ? "" : "s") << " (" << n_new << " new";
       if (n_new > 0) out << " on " << n_workers << " worker" << (n_workers == 1 ? "" : "s");
-      out << ", " << runs.size() - n_new << " reused, " << n_failed << " failed) in "
+      if (n_study > 0) out << ", " << n_study << " from the study";
+      out << ", " << runs.size() - n_new - n_study << " reused, " << n_failed << " failed) in "
           << format_duration(std::chrono::duration<double>(Clock::now() - batch_start).count()) << "; "
           << result.evaluations.size() << " runs so far";
       if (best_theta.size() > 0) {
@@ -309,7 +486,7 @@ CalibrationResult Calibration::run() const {
 
   SbalcResult sbalc;
   try {
-    sbalc = Sbalc(static_cast<int>(d), evaluate_batch, options_.sbalc).run();
+    sbalc = Sbalc(static_cast<int>(d), evaluate_batch, sbalc_options).run();
   } catch (const AbortCalibration& abort) {
     if (abort.interrupted) throw CalibrationInterrupted(abort.message);
     throw CalibrationError(abort.message);

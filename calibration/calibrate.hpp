@@ -34,6 +34,18 @@
 // than before continues a calibration that did not converge. Files of another model
 // set-up (parameters, config keys, units, features, the model fingerprint) are refused
 // with the first difference; without resume an existing folder is never reused.
+//
+// Runs of an earlier study (initial runs). The finished runs of a study results file of
+// the same model and parameters (an `rsw study run` of a sensitivity design, say) can
+// stand in for SBALC's Hammersley initial design: each run's θ is mapped into the unit
+// cube through the priors' CDFs, u_i = F_i(θ_i), and the run enters the first GP as it
+// was recorded (a failed run as a failed evaluation), without running the model again.
+// If fewer than SbalcOptions::n_initial runs are usable, Hammersley points fill the
+// design up to n_initial. Usable: finished, θ inside the calibration's prior box
+// (the priors may be narrower than the study's), and not a repeat of an earlier θ;
+// the others are skipped with a note. The file must name the same parameters in the
+// same order with the same config keys and units, the same model set-up (fingerprint)
+// and every feature of the calibration (it may have more).
 #pragma once
 
 #include "calibration/farm.hpp"
@@ -63,6 +75,29 @@ class CalibrationInterrupted : public CalibrationError {
   using CalibrationError::CalibrationError;
 };
 
+// A finished run of a study results file, as an initial run of the calibration.
+struct InitialRun {
+  std::size_t index = 0;        // its point in the study
+  Eigen::VectorXd theta;        // physical θ as stored
+  bool ok = false;
+  Eigen::VectorXd features;     // the calibration's features, SI; NaN unless ok
+  std::string failure_reason;
+  std::string warnings;
+  double wall_time = 0.0;
+};
+
+struct InitialRuns {
+  std::filesystem::path file;     // the study results file; empty: no initial runs
+  std::vector<InitialRun> runs;   // the usable runs, in the file's order
+  std::vector<std::string> notes; // what was skipped and why, priors that differ
+};
+
+// Reads the usable runs of `results_file` for a calibration of `design` (see "Runs of
+// an earlier study" above). Throws CalibrationError naming the file and the first
+// difference (parameters, config keys, units, model set-up, a missing feature), or a
+// file that is not a study results file.
+InitialRuns read_initial_runs(const std::filesystem::path& results_file, const StudyDesign& design);
+
 struct CalibrationOptions {
   SbalcOptions sbalc;
   PosteriorOptions posterior;
@@ -73,6 +108,8 @@ struct CalibrationOptions {
   // one line per batch goes to `progress` below).
   FarmOptions farm;
   std::ostream* progress = nullptr;
+  // Runs of an earlier study that make up the initial design (read_initial_runs).
+  InitialRuns initial_runs;
 };
 
 // One forward-model run asked for by SBALC, in the order asked.
@@ -87,6 +124,7 @@ struct CalibrationEvaluation {
   std::string warnings;           // what the model warned of in a run that succeeded; empty if nothing
   double wall_time = 0.0;         // [s] of the run
   bool reused = false;            // found in the evaluation cache (resume)
+  bool from_study = false;        // an initial run, taken from the study results file
 };
 
 struct CalibrationResult {
@@ -116,6 +154,7 @@ struct CalibrationResult {
   std::vector<CalibrationEvaluation> evaluations;
   std::size_t n_evaluations = 0;    // runs asked for by SBALC (reused included)
   std::size_t n_reused = 0;         // taken from the evaluation cache
+  std::size_t n_from_study = 0;     // initial runs taken from a study results file
   std::size_t n_failed = 0;
 
   // Posterior, physical units.

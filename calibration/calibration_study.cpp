@@ -32,6 +32,7 @@ const char* const observations_signal_files = "calibration.observations.signal_f
 const char* const noise_kind = "calibration.noise.kind";
 const char* const noise_standard_deviations = "calibration.noise.standard_deviations";
 const char* const noise_discrepancy = "calibration.noise.discrepancy";
+const char* const initial_runs_key = "calibration.initial_runs";
 
 // A default value as the schema shows it: 15 significant digits, no trailing zeros.
 std::string shortest(double value) {
@@ -227,6 +228,9 @@ void declare_calibration_keys(fem::ConfigSchema& s) {
                                                                          : "full_quadratic")
       .doc("GP mean function; a quadratic suits a log-likelihood and is used once there are enough points.");
 
+  s.string(initial_runs_key).default_value("")
+      .doc("Results (.h5) or study file of a study of this model: its runs start SBALC (docs/CALIBRATION.md).");
+
   s.section("calibration.posterior", "Sampling-importance-resampling of the prior pool (Smith & Gelfand 1992).");
   s.integer("calibration.posterior.n_samples").default_value("4000").range(Range::closed(10, 10000000))
       .doc("Posterior draws written to <name>_posterior.csv.");
@@ -332,7 +336,57 @@ CalibrationSettings read_calibration_settings(const Study& study) {
   settings.posterior.credible_level = c.number("calibration.posterior.credible_level");
   settings.posterior.seed = sbalc.seed;
   settings.n_predictive_samples = c.integer("calibration.posterior.n_predictive");
+
+  // Runs of an earlier study.
+  if (const std::string text = c.text(initial_runs_key); !text.empty()) {
+    const fs::path file = resolve(study, text);
+    std::error_code error;
+    if (!fs::is_regular_file(file, error)) {
+      c.fail(initial_runs_key, "no such file (looked for " + file.string() +
+                                   "); allowed: a study results file (.h5) or a study file, relative to the study "
+                                   "file's folder");
+    }
+    if (file.extension() == ".h5") {
+      settings.initial_runs = file;
+    } else if (fs::equivalent(file, study.file(), error)) {
+      settings.initial_runs = study.results_file();
+    } else {
+      try {
+        settings.initial_runs = Study::load(file).results_file();
+      } catch (const fem::ConfigError& e) {
+        c.fail(initial_runs_key, std::string("not a study results file (.h5), nor a study file: ") + e.what());
+      }
+    }
+    if (!fs::is_regular_file(settings.initial_runs, error)) {
+      c.fail(initial_runs_key, "the study's results file " + settings.initial_runs.string() +
+                                   " does not exist; run `rsw study run " + file.string() + "` first");
+    }
+  }
   return settings;
+}
+
+InitialRuns load_initial_runs(const Study& study, const CalibrationSettings& settings) {
+  if (settings.initial_runs.empty()) return {};
+  StudyDesign design;
+  design.name = study.name();
+  design.parameters = study.parameter_space();
+  design.feature_names = study.feature_names();
+  design.model = study.model_fingerprint();
+  InitialRuns initial;
+  try {
+    initial = read_initial_runs(settings.initial_runs, design);
+  } catch (const CalibrationError& e) {
+    study.config().fail(initial_runs_key, e.what());
+  }
+  const std::size_t n_design =
+      std::max(initial.runs.size(), static_cast<std::size_t>(std::max(settings.sbalc.n_initial, 0)));
+  if (n_design >= static_cast<std::size_t>(settings.sbalc.max_evaluations)) {
+    fail_key(study, "calibration.sbalc.max_evaluations",
+             "the initial design holds " + std::to_string(n_design) + " runs of " + settings.initial_runs.string() +
+                 " (calibration.initial_runs), and the cap counts them; allowed: more than " +
+                 std::to_string(n_design));
+  }
+  return initial;
 }
 
 Observations read_features_file(const fs::path& file, const std::vector<std::string>& feature_names) {

@@ -23,6 +23,12 @@
 //             kernel: matern52 | squared_exponential, trend}       (sbalc.hpp; Li et al. 2025)
 //     posterior: {n_samples, credible_level, n_predictive}          (posterior.hpp; SIR,
 //                                                                    Smith & Gelfand 1992)
+//     initial_runs: results/sens.h5 or sens.yaml   the finished runs of an earlier study of
+//                                          the same model and parameters become SBALC's
+//                                          initial design (calibrate.hpp, "Runs of an
+//                                          earlier study"); a study file stands for its
+//                                          results file (this study's own file: in the
+//                                          output folder of this calibration, -o included)
 //
 // Spreads (σ_j, δ_j) are quantities in any unit of the feature's kind; a bare number is
 // in the feature's SI unit (ohm, m, s, degC). A spread of a temperature is a
@@ -33,6 +39,7 @@
 // line and column too.
 #pragma once
 
+#include "calibration/calibrate.hpp"
 #include "calibration/features.hpp"
 #include "calibration/likelihood.hpp"
 #include "calibration/posterior.hpp"
@@ -65,6 +72,7 @@ struct CalibrationSettings {
   SbalcOptions sbalc;
   PosteriorOptions posterior;  // n_samples, seed, credible_level
   int n_predictive_samples = 4;  // posterior samples run for predictive signals (besides the mean)
+  std::filesystem::path initial_runs;  // a study results file, absolute; empty: none
 };
 
 // Reads and checks the calibration section of a loaded study (observation files are
@@ -100,6 +108,13 @@ Observations features_of_signal_files(const std::vector<std::filesystem::path>& 
 // The study's observations; an ObservationError becomes a fem::ConfigError that also
 // names the study key and where it was set.
 Observations load_observations(const Study& study, const CalibrationSettings& settings);
+
+// The usable runs of calibration.initial_runs for a calibration of `study`
+// (read_initial_runs; empty if the key is not given). A file of another set-up, without
+// a usable run, or an initial design that leaves no room under
+// calibration.sbalc.max_evaluations is a fem::ConfigError naming the key, where it was
+// set, its value and the difference.
+InitialRuns load_initial_runs(const Study& study, const CalibrationSettings& settings);
 
 // The Gaussian likelihood of the study's features; an inconsistent noise model (a zero
 // variance, replicate scatter of a single replicate) is a fem::ConfigError naming

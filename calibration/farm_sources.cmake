@@ -15,7 +15,8 @@ set(RSW_CALIBRATION_FARM_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/study.cpp
   ${CMAKE_CURRENT_LIST_DIR}/sensitivity.cpp
   ${CMAKE_CURRENT_LIST_DIR}/calibration_study.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/calibrate.cpp)
+  ${CMAKE_CURRENT_LIST_DIR}/calibrate.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/command_model.cpp)
 set(RSW_CALIBRATION_FARM_LIBS rsw_fem nlohmann_json::nlohmann_json)
 
 option(RSW_WITH_MPI "Run studies over MPI ranks when an MPI library is found" ON)

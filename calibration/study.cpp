@@ -1,8 +1,10 @@
 // Study files: the schema, the checks that span several keys (priors, nominal values,
-// features, the model's case file), and the designs built from them; see study.hpp.
+// features, the model's case file or command), and the designs built from them; see
+// study.hpp.
 #include "calibration/study.hpp"
 
 #include "calibration/calibration_study.hpp"
+#include "calibration/command_model.hpp"
 #include "calibration/designs.hpp"
 #include "calibration/features.hpp"
 
@@ -17,6 +19,8 @@
 #include <sstream>
 #include <utility>
 
+#include <unistd.h>
+
 namespace rsw::calibration {
 namespace {
 
@@ -25,12 +29,12 @@ using fem::Config;
 using fem::ConfigSchema;
 using fem::Range;
 
-const char* const intro = R"(A study runs a design of experiments through the weld
-forward model: `rsw study run STUDY` evaluates every point (in parallel, resumable,
-failures recorded), `rsw study sensitivity STUDY` fits a sparse PCE per feature and
-writes Sobol indices, `rsw calibrate STUDY` calibrates the parameters against the
-observations of the `calibration` section. See docs/STUDIES.md for the workflow, MPI
-and array jobs.
+const char* const intro = R"(A study runs a design of experiments through the forward
+model (the weld, or a program: `model.command`): `rsw study run STUDY` evaluates every
+point (in parallel, resumable, failures recorded), `rsw study sensitivity STUDY` fits
+a sparse PCE per feature and writes Sobol indices, `rsw calibrate STUDY` calibrates
+the parameters against the observations of the `calibration` section. See
+docs/STUDIES.md for the workflow, MPI and array jobs.
 
 Parameter values (bounds, mean, standard deviation, nominal) are quantities with a
 unit, such as `1e-4 mm` or `35 W/(m*K)`; a bare number is read in the parameter's
@@ -54,7 +58,8 @@ ConfigSchema build_schema() {
   s.string("parameters[].name").default_value("")
       .doc("Name of the parameter (letters, digits, '_'), used in tables and plots; required.");
   s.string("parameters[].config_key").default_value("")
-      .doc("Weld-case config key the value is written to, e.g. contact.sheet_sheet.film_thickness; required.");
+      .doc("Weld-case config key the value is written to, e.g. contact.sheet_sheet.film_thickness; required "
+           "unless model.command.");
   s.string("parameters[].unit").default_value("1")
       .doc("Unit of θ handed to the forward model and of bare numbers below (the config key's internal unit, e.g. m).");
   s.choice("parameters[].prior", prior_choices).default_value("uniform")
@@ -94,9 +99,11 @@ ConfigSchema build_schema() {
   s.string("features[].name").default_value("")
       .doc("Feature name, e.g. R_beta, dS_P, T_max, d_n_liq; required.");
 
-  s.section("model", "The forward model: the weld case every run starts from.");
+  s.section("model", "The forward model: the weld case every run starts from, or a command.");
   s.string("model.case").default_value("")
       .doc("Weld-case file, relative to the study file's folder (or absolute); must exist when given.");
+  s.string("model.command").default_value("")
+      .doc("Instead of a case: a program run per point, e.g. 'python3 model.py' (docs/STUDIES.md).");
   s.list("model.set").default_value("[]")
       .doc("Config overrides applied to the case for every run, before the parameters.");
   s.string("model.set[].key").default_value("")
@@ -190,7 +197,9 @@ struct ParameterEntry {
   double nominal;
 };
 
-ParameterEntry read_parameter(const Config& config, int i) {
+// `command_model`: the study's model is a command, which needs no config keys (a
+// parameter without one gets its name).
+ParameterEntry read_parameter(const Config& config, int i, bool command_model) {
   const auto key = [i](const std::string& name) { return fem::item_path("parameters", i, name); };
   const std::vector<std::string> located_by = {"name", "config_key", "prior", "lower", "upper", "mean"};
   struct {
@@ -203,9 +212,11 @@ ParameterEntry read_parameter(const Config& config, int i) {
     config.fail(key("name"), "not a name; allowed: letters, digits and '_', not starting with a digit");
   }
   p.config_key = config.text(key("config_key"));
+  if (p.config_key.empty() && command_model) p.config_key = p.name;
   if (p.config_key.empty()) {
     missing(config, "parameters", i, located_by, "config_key",
-            "every parameter needs the weld-case key it sets, e.g. contact.sheet_sheet.film_thickness");
+            "every parameter needs the weld-case key it sets, e.g. contact.sheet_sheet.film_thickness (a "
+            "model.command needs none)");
   }
   if (!std::regex_match(p.config_key, key_pattern())) {
     config.fail(key("config_key"), "not a config key; allowed: names joined by '.', e.g. thermal.melt_conductivity");
@@ -331,7 +342,7 @@ Study::Study(Config config, fs::path file) : config_(std::move(config)), file_(s
   }
   std::vector<ParameterEntry> entries;
   for (int i = 0; i < n_parameters; ++i) {
-    entries.push_back(read_parameter(c, i));
+    entries.push_back(read_parameter(c, i, !c.text("model.command").empty()));
     for (int j = 0; j < i; ++j) {
       const auto& earlier = entries[static_cast<std::size_t>(j)].parameter;
       const auto& now = entries.back().parameter;
@@ -391,6 +402,40 @@ Study::Study(Config config, fs::path file) : config_(std::move(config)), file_(s
 
   // Forward model.
   const std::string case_text = c.text("model.case");
+  const std::string command_text = c.text("model.command");
+  if (!command_text.empty()) {
+    if (!case_text.empty()) {
+      c.fail("model.command", "given together with model.case (" + c.origin("model.case").where() +
+                                  "); allowed: one of the two, a weld case or a command");
+    }
+    if (c.n_items("model.set") > 0) {
+      c.fail("model.command", "given together with model.set (" + c.origin("model.set").where() +
+                                  "), which overrides keys of a weld case; a command takes none");
+    }
+    model_kind_ = ModelKind::command;
+    try {
+      command_words_ = split_command_line(command_text);
+    } catch (const std::invalid_argument& e) {
+      c.fail("model.command", std::string(e.what()).substr(command_text.size() + 4));
+    }
+    for (std::size_t k = 0; k < command_words_.size(); ++k) {
+      const fs::path word(command_words_[k]);
+      const fs::path here = word.is_absolute() ? word : (folder / word).lexically_normal();
+      std::error_code error;
+      const bool exists = !command_words_[k].empty() && fs::exists(here, error);
+      const bool names_path = k == 0 ? (exists || command_words_[k].find('/') != std::string::npos) : exists;
+      command_.push_back(names_path && !word.is_absolute() ? here.string() : command_words_[k]);
+      if (exists && !word.is_absolute() && fs::is_regular_file(here, error)) command_files_.push_back(k);
+      if (k > 0 || !names_path) continue;  // a bare program name: looked up on PATH by the caller
+      const std::string allowed = "; allowed: an executable file (relative to the study file's folder, or "
+                                  "absolute), or a program on PATH, then its arguments, e.g. 'python3 model.py'";
+      if (!exists) c.fail("model.command", "no program " + here.string() + allowed);
+      if (!fs::is_regular_file(here, error) || ::access(here.c_str(), X_OK) != 0) {
+        c.fail("model.command", "the program " + here.string() + " is not an executable file (chmod +x, or name "
+                                "its interpreter first, e.g. 'python3 " + command_words_[0] + "')" + allowed);
+      }
+    }
+  }
   if (!case_text.empty()) {
     const fs::path given_path(case_text);
     case_file_ = given_path.is_absolute() ? given_path : (folder / given_path).lexically_normal();
@@ -430,22 +475,43 @@ void Study::set_output_folder(const fs::path& folder) { output_folder_ = fs::abs
 
 fs::path Study::results_file() const { return output_folder_ / (name_ + ".h5"); }
 
+namespace {
+
+// "fnv1a64:<16 hex digits>" of a file's bytes: FNV-1a, 64 bit (Fowler, Noll, Vo), enough
+// to notice an edited case file or script. `key` names the study key for a read error.
+std::string file_hash(const Config& config, const std::string& key, const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) config.fail(key, "cannot be read (" + file.string() + ")");
+  std::uint64_t hash = 14695981039346656037ull;
+  char c;
+  while (in.get(c)) {
+    hash ^= static_cast<unsigned char>(c);
+    hash *= 1099511628211ull;
+  }
+  std::ostringstream text;
+  text << "fnv1a64:" << std::hex << std::setw(16) << std::setfill('0') << hash;
+  return text.str();
+}
+
+}  // namespace
+
 std::string Study::model_fingerprint() const {
   std::ostringstream text;
+  if (model_kind_ == ModelKind::command) {
+    text << "command";
+    for (const auto& word : command_words_) text << " " << word;
+    for (std::size_t k = 0; k < command_files_.size(); ++k) {
+      const std::size_t word = command_files_[k];
+      text << (k ? ", " : "; ") << command_words_[word] << " "
+           << file_hash(config_, "model.command", command_[word]);
+    }
+    return text.str();
+  }
   text << "case ";
   if (case_file_.empty()) {
     text << "none";
   } else {
-    // FNV-1a, 64 bit (Fowler, Noll, Vo): enough to notice an edited case file.
-    std::ifstream in(case_file_, std::ios::binary);
-    if (!in) config_.fail("model.case", "cannot be read (" + case_file_.string() + ")");
-    std::uint64_t hash = 14695981039346656037ull;
-    char c;
-    while (in.get(c)) {
-      hash ^= static_cast<unsigned char>(c);
-      hash *= 1099511628211ull;
-    }
-    text << "fnv1a64:" << std::hex << std::setw(16) << std::setfill('0') << hash << std::dec;
+    text << file_hash(config_, "model.case", case_file_);
   }
   text << "; set";
   if (model_overrides_.empty()) text << " nothing";

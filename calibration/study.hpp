@@ -18,7 +18,9 @@
 //               other parameter nominal (1 + d·n_levels runs).
 //   features:   a list of feature names (docs/STUDIES.md, "The features"), the forward model's outputs.
 //   model:      the weld-case file (relative to the study file) and extra config
-//               overrides for every run.
+//               overrides for every run; or instead a command, an external program
+//               run once per point (command_model.hpp): then parameters need no
+//               config key and features may have any name.
 //   sensitivity: degree range and q-norm of the sparse PCE (calibration/pce.hpp).
 //   calibration: observations, noise model, SBALC and posterior settings of
 //               `rsw calibrate` (declared and read by calibration/calibration_study.hpp).
@@ -48,6 +50,9 @@ namespace rsw::calibration {
 fem::ConfigSchema study_schema();
 
 enum class DesignKind { lhs, hammersley, oat };
+
+// What runs each point: the weld case (model.case) or an external program (model.command).
+enum class ModelKind { weld, command };
 
 struct DesignSettings {
   DesignKind kind = DesignKind::lhs;
@@ -79,6 +84,12 @@ class Study {
   // θ of the nominal point (physical), used by one-at-a-time designs.
   const Eigen::VectorXd& nominal_point() const { return nominal_; }
 
+  ModelKind model_kind() const { return model_kind_; }
+  // The words of model.command: a word that names a file or folder relative to the study
+  // file's folder is its absolute path; the first word may still be a bare program name
+  // (looked up on PATH by the caller). Empty unless model_kind() == command.
+  const std::vector<std::string>& command() const { return command_; }
+
   // The weld-case file (absolute; empty if the study names none) and the overrides
   // "key=value" applied to it for every run, before θ.
   const std::filesystem::path& case_file() const { return case_file_; }
@@ -91,8 +102,10 @@ class Study {
 
   PceOptions pce_options() const { return pce_options_; }
 
-  // "case <FNV-1a 64 hash of the case file's bytes>; set key=value, ..." — identifies
-  // the forward model's set-up in results files, independent of where the case lies.
+  // "case <FNV-1a 64 hash of the case file's bytes>; set key=value, ..." or, for a
+  // command, "command <its words as written>; <word> fnv1a64:<hash>, ..." with the hash
+  // of each word that names a file of the study's folder (the model's script) — identifies
+  // the forward model's set-up in results files, independent of where the files lie.
   std::string model_fingerprint() const;
 
   // The design points and names, ready for the farm (resolved study YAML as description,
@@ -109,6 +122,10 @@ class Study {
   Eigen::VectorXd nominal_;
   std::vector<std::string> features_;
   DesignSettings design_;
+  ModelKind model_kind_ = ModelKind::weld;
+  std::vector<std::string> command_words_;  // as written
+  std::vector<std::string> command_;        // files of the study's folder made absolute
+  std::vector<std::size_t> command_files_;  // the words that name regular files there
   std::filesystem::path case_file_;
   std::vector<std::string> model_overrides_;
   std::filesystem::path output_folder_;

@@ -468,12 +468,13 @@ void write_h5(const fs::path& path, const cal::Study& study, const cal::Calibrat
 
   // Every run SBALC asked for, in order.
   const auto p = static_cast<Eigen::Index>(result.feature_names.size());
-  Eigen::MatrixXd runs(static_cast<Eigen::Index>(result.evaluations.size()), 5 + 2 * d + p);
+  Eigen::MatrixXd runs(static_cast<Eigen::Index>(result.evaluations.size()), 6 + 2 * d + p);
   Json reasons = Json::object(), warnings = Json::object();
   for (std::size_t r = 0; r < result.evaluations.size(); ++r) {
     const cal::CalibrationEvaluation& e = result.evaluations[r];
     runs.row(static_cast<Eigen::Index>(r)) << static_cast<double>(e.batch), e.ok ? 1.0 : 0.0, e.reused ? 1.0 : 0.0,
-        e.wall_time, e.log_likelihood, e.theta_unit.transpose(), e.theta.transpose(), e.features.transpose();
+        e.wall_time, e.log_likelihood, e.theta_unit.transpose(), e.theta.transpose(), e.features.transpose(),
+        e.from_study ? 1.0 : 0.0;
     if (!e.ok) reasons[std::to_string(r)] = e.failure_reason;
     if (!e.warnings.empty()) warnings[std::to_string(r)] = e.warnings;
   }
@@ -481,6 +482,7 @@ void write_h5(const fs::path& path, const cal::Study& study, const cal::Calibrat
   for (const auto& name : result.parameter_names) columns.push_back("u:" + name);
   for (const auto& name : result.parameter_names) columns.push_back("theta:" + name);
   for (const auto& name : result.feature_names) columns.push_back("y:" + name);
+  columns.push_back("from_study");
   h5.write("/evaluations/table", to_row_major(runs));
   h5.set_attribute("/evaluations/table", "columns", columns.dump());
   h5.write_string("/evaluations/failure_reasons", reasons.dump(1));
@@ -522,8 +524,7 @@ void run_calibrate(const CalibrateOptions& options, const ForwardModelFactory& f
   const cal::CalibrationSettings settings = cal::read_calibration_settings(study);
   const cal::Observations observations = cal::load_observations(study, settings);
   const cal::GaussianLikelihood likelihood = cal::make_likelihood(study, settings, observations);
-  const std::unique_ptr<cal::ForwardModel> model = factory(study);
-  if (!model) throw std::runtime_error("study '" + study.name() + "': no forward model");
+  const std::unique_ptr<cal::ForwardModel> model = make_forward_model(study, factory);
 
   const fs::path output = study.output_folder();
   const fs::path calibration_folder = output / (study.name() + "_calibration");
@@ -535,6 +536,7 @@ void run_calibrate(const CalibrateOptions& options, const ForwardModelFactory& f
   calibration_options.farm.resume = options.resume;
   calibration_options.farm.run_timeout = options.run_timeout;
   calibration_options.progress = options.quiet ? nullptr : &std::cerr;
+  calibration_options.initial_runs = cal::load_initial_runs(study, settings);
   if (!options.resume && fs::exists(calibration_folder) && !fs::is_empty(calibration_folder)) {
     throw std::runtime_error("calibration folder '" + calibration_folder.string() +
                              "' exists already; continue the calibration with --resume, or remove it to start again");
@@ -549,6 +551,16 @@ void run_calibrate(const CalibrateOptions& options, const ForwardModelFactory& f
               << ", " << settings.sbalc.n_initial << " initial points, batches of " << settings.sbalc.batch_size
               << ", at most " << settings.sbalc.max_evaluations << " runs, nugget "
               << nugget_name(settings.sbalc.gp.nugget_mode) << "\n";
+  }
+  const cal::InitialRuns& initial = calibration_options.initial_runs;
+  if (!initial.runs.empty() && !options.quiet) {
+    const auto n_ok = std::count_if(initial.runs.begin(), initial.runs.end(), [](const cal::InitialRun& r) { return r.ok; });
+    std::cerr << "calibration " << study.name() << ": initial design from " << initial.file.string() << ": "
+              << initial.runs.size() << " runs (" << n_ok << " ok, " << initial.runs.size() - n_ok << " failed)";
+    if (static_cast<int>(initial.runs.size()) < settings.sbalc.n_initial)
+      std::cerr << " and " << settings.sbalc.n_initial - static_cast<int>(initial.runs.size()) << " Hammersley points";
+    std::cerr << "\n";
+    for (const auto& note : initial.notes) std::cerr << "  note: " << note << "\n";
   }
 
   const cal::CalibrationResult result =
@@ -592,6 +604,7 @@ void run_calibrate(const CalibrateOptions& options, const ForwardModelFactory& f
         {"pool_ess_threshold", result.pool_ess_threshold}}},
       {"n_evaluations", result.n_evaluations},
       {"n_reused", result.n_reused},
+      {"n_from_study", result.n_from_study},
       {"n_failed", result.n_failed},
       {"n_warned", std::count_if(result.evaluations.begin(), result.evaluations.end(),
                                  [](const cal::CalibrationEvaluation& e) { return !e.warnings.empty(); })},
@@ -618,6 +631,8 @@ void run_calibrate(const CalibrateOptions& options, const ForwardModelFactory& f
         {"signal_files", observed_files},
         {"values", Json::array()}}},
       {"predictive", predictive_json},
+      {"initial_runs",
+       {{"file", initial.file.string()}, {"n_runs", initial.runs.size()}, {"notes", initial.notes}}},
       {"files",
        {{"h5", files.h5.string()},
         {"posterior_csv", files.posterior_csv.string()},
@@ -639,9 +654,12 @@ void run_calibrate(const CalibrateOptions& options, const ForwardModelFactory& f
   // Report: the warnings first, before any "converged".
   for (const auto& warning : result.warnings)
     std::printf("calibration %s: warning: %s\n", study.name().c_str(), warning.c_str());
-  std::printf("calibration %s: %s after %zu runs (%zu reused, %zu failed), %zu iterations, %s\n", study.name().c_str(),
-              result.converged ? "converged" : "NOT converged", result.n_evaluations, result.n_reused,
-              result.n_failed, result.history.size(), cal::format_duration(result.elapsed).c_str());
+  const std::string from_study =
+      result.n_from_study > 0 ? std::to_string(result.n_from_study) + " from the study, " : std::string();
+  std::printf("calibration %s: %s after %zu runs (%s%zu reused, %zu failed), %zu iterations, %s\n",
+              study.name().c_str(), result.converged ? "converged" : "NOT converged", result.n_evaluations,
+              from_study.c_str(), result.n_reused, result.n_failed, result.history.size(),
+              cal::format_duration(result.elapsed).c_str());
   std::printf("  %s\n", result.stop_reason.c_str());
   for (std::size_t r = 0; r < result.evaluations.size(); ++r)
     if (!result.evaluations[r].warnings.empty() && !result.evaluations[r].reused)

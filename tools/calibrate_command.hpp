@@ -11,7 +11,8 @@
 //   <name>_posterior.csv      posterior draws, physical units
 //   <name>_diagnostics.csv    one row per SBALC iteration
 //   <name>_calibration.json   summary: warnings, evidence, convergence, runs, mean, MAP,
-//                             credible intervals, ESS, predictive runs, file names
+//                             credible intervals, ESS, predictive runs, file names, the
+//                             initial runs taken from a study (calibration.initial_runs)
 //   <name>_calibration/       the evaluation cache (runs_NNNN.h5, one study results file
 //                             per batch), predictive.h5 and predictive/<run>/ (for the
 //                             weld: signals.csv, results.h5, summary.json)

@@ -6,6 +6,7 @@
 #include "tools/mpi_launcher.hpp"
 #include "tools/plots.hpp"
 
+#include "calibration/command_model.hpp"
 #include "calibration/farm.hpp"
 #include "calibration/features.hpp"
 #include "calibration/sensitivity.hpp"
@@ -16,7 +17,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include <unistd.h>
+
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -188,8 +192,7 @@ void run_study(const StudyOptions& options, const ForwardModelFactory& factory) 
   farm_options.run_timeout = options.run_timeout;
   farm_options.progress = options.quiet ? nullptr : &std::cerr;
   farm_options.started_by_mpi_launcher = started_by_mpi_launcher();
-  const std::unique_ptr<cal::ForwardModel> model = factory(study);
-  if (!model) throw std::runtime_error("study '" + study.name() + "': no forward model");
+  const std::unique_ptr<cal::ForwardModel> model = make_forward_model(study, factory);
   const fs::path file = cal::task_results_file(study.results_file(), farm_options.task);
   cal::EvaluationFarm farm(*model, study.design(), file, farm_options);
   const cal::FarmSummary summary = farm.run();
@@ -255,6 +258,11 @@ void show_study(const StudyOptions& options) {
             << design.parameters.n_parameters() << " parameters, " << design.feature_names.size() << " features\n"
             << "# results: " << study.results_file().string() << "\n";
   if (!study.case_file().empty()) std::cout << "# weld case: " << study.case_file().string() << "\n";
+  if (study.model_kind() == cal::ModelKind::command) {
+    std::cout << "# command:";
+    for (const auto& word : study.command()) std::cout << " " << word;
+    std::cout << "\n";
+  }
 }
 
 // --- features ----------------------------------------------------------------------
@@ -326,6 +334,42 @@ void print_features(const FeaturesOptions& options) {
 }
 
 }  // namespace
+
+std::unique_ptr<cal::ForwardModel> make_forward_model(const cal::Study& study, const ForwardModelFactory& factory) {
+  if (study.model_kind() != cal::ModelKind::command) {
+    std::unique_ptr<cal::ForwardModel> model = factory(study);
+    if (!model) throw std::runtime_error("study '" + study.name() + "': no forward model");
+    return model;
+  }
+  std::vector<std::string> arguments = study.command();
+  if (!fs::path(arguments[0]).is_absolute()) {
+    const char* path = std::getenv("PATH");
+    const std::string directories = path ? path : "";
+    std::string found;
+    std::size_t start = 0;
+    while (found.empty() && start <= directories.size()) {
+      const std::size_t colon = std::min(directories.find(':', start), directories.size());
+      const std::string directory = directories.substr(start, colon - start);
+      const fs::path candidate = fs::path(directory.empty() ? "." : directory) / arguments[0];
+      std::error_code error;
+      if (fs::is_regular_file(candidate, error) && ::access(candidate.c_str(), X_OK) == 0)
+        found = fs::absolute(candidate).string();
+      start = colon + 1;
+    }
+    if (found.empty()) {
+      study.config().fail("model.command", "no program '" + arguments[0] +
+                                               "' in the study file's folder or on PATH (" + directories +
+                                               "); allowed: an executable file (relative to the study file's "
+                                               "folder, or absolute), or a program on PATH, then its arguments");
+    }
+    arguments[0] = found;
+  }
+  std::error_code error;
+  fs::path temporary = fs::temp_directory_path(error);
+  if (error) temporary = "/tmp";
+  return std::make_unique<cal::CommandModel>(std::move(arguments), study.parameter_space().names(),
+                                             study.feature_names(), temporary);
+}
 
 void add_study_commands(CLI::App& app, ForwardModelFactory model_factory) {
   auto options = std::make_shared<StudyOptions>();

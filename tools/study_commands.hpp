@@ -25,6 +25,13 @@ namespace rsw::tools {
 using ForwardModelFactory =
     std::function<std::unique_ptr<calibration::ForwardModel>(const calibration::Study&)>;
 
+// The forward model of a study: an external program (calibration/command_model.hpp)
+// when the study gives model.command, else `factory`'s. A bare program name is looked up
+// on PATH, the run folders go to the temporary folder (TMPDIR, else /tmp); a program not
+// found is a fem::ConfigError naming model.command.
+std::unique_ptr<calibration::ForwardModel> make_forward_model(const calibration::Study& study,
+                                                              const ForwardModelFactory& factory);
+
 // Adds `study` with run, merge, sensitivity, show and schema. `model_factory` is called
 // once per `study run`, before the worker processes start.
 void add_study_commands(CLI::App& app, ForwardModelFactory model_factory);

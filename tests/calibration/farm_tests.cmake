@@ -45,3 +45,9 @@ gtest_discover_tests(test_calibration_calibrate
 gtest_discover_tests(test_calibration_calibrate
   TEST_FILTER "*LinearGaussian*"
   PROPERTIES LABELS verification ENVIRONMENT OMP_NUM_THREADS=1 DISCOVERY_TIMEOUT 60)
+
+# An external program as the forward model (command_model.hpp): the words of a command
+# line, the file protocol and failed runs, against small sh scripts.
+add_executable(test_calibration_command ${CMAKE_CURRENT_LIST_DIR}/test_command_model.cpp)
+target_link_libraries(test_calibration_command PRIVATE rsw_calibration nlohmann_json::nlohmann_json GTest::gtest_main)
+gtest_discover_tests(test_calibration_command PROPERTIES LABELS unit DISCOVERY_TIMEOUT 60)

@@ -9,9 +9,17 @@
 //   - the warnings of a calibration (why it did not converge) come before the line that
 //     says whether it converged, and into the summary;
 //   - a bad observation file exits with code 2 naming the study key, file and line;
+//   - a calibration can start from the runs of an earlier `rsw study run`
+//     (calibration.initial_runs): they are its first GP's data, none is run again, θ is
+//     mapped into the unit cube through the calibration's priors, runs outside a
+//     narrower prior are skipped with a note, runs of another set-up are refused, and
+//     --resume replays such a calibration exactly;
 //   - the twin-experiment studies load (`study show`);
 //   - the plot script draws the corner plot, the convergence history and the
 //     predictive overlay.
+#include "calibration/farm.hpp"
+#include "fem/hdf5_file.hpp"
+
 #include <nlohmann/json.hpp>
 
 #include <gtest/gtest.h>
@@ -32,6 +40,7 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <vector>
 
 namespace fs = std::filesystem;
 
@@ -95,6 +104,50 @@ calibration:
                                                          std::to_string(max_evaluations) + R"(}
   posterior: {n_samples: 1000, n_predictive: 2}
 )");
+}
+
+// A study of the same smooth analytic model with a 12-point LHS design and a
+// calibration section whose initial design is `initial_runs`; `parameters` and
+// `features` replace the defaults (a, b on [0, 1]; R_beta, dS_P).
+fs::path write_initial_runs_study(const fs::path& dir, const std::string& name, const std::string& initial_runs,
+                                  const std::string& parameters = "", const std::string& features = "",
+                                  const std::string& sbalc = "{batch_size: 3, max_evaluations: 60}",
+                                  const std::string& case_file = "case.yaml") {
+  if (!fs::exists(dir / "case.yaml")) write_file(dir / "case.yaml", "analytic: {function: smooth}\n");
+  if (!fs::exists(dir / "observed.csv"))
+    write_file(dir / "observed.csv", "R_beta, dS_P, T_max\n2.29, 2.53, 1\n2.28, 2.55, 1\n2.30, 2.52, 1\n");
+  const std::string default_parameters = R"(
+  - {name: a, config_key: test.a, prior: uniform, lower: 0, upper: 1}
+  - {name: b, config_key: test.b, prior: uniform, lower: 0, upper: 1})";
+  return write_file(dir / (name + ".yaml"), "study: {name: " + name + "}\nparameters:" +
+                                                (parameters.empty() ? default_parameters : parameters) + R"(
+design: {kind: lhs, n_points: 12, seed: 7}
+features: )" + (features.empty() ? "[{name: R_beta}, {name: dS_P}]" : features) + R"(
+model: {case: )" + case_file + R"(}
+calibration:
+  observations: {features_file: observed.csv}
+  noise: {kind: relative, fraction: 0.02}
+  sbalc: )" + sbalc + R"(
+  posterior: {n_samples: 1000, n_predictive: 1}
+  initial_runs: )" + initial_runs + "\n");
+}
+
+// /evaluations/table of a calibration file, by column name.
+struct EvaluationTable {
+  std::vector<std::string> columns;
+  rsw::fem::RowMajorMatrix values;
+  double operator()(std::size_t row, const std::string& column) const {
+    const auto k = static_cast<std::size_t>(std::find(columns.begin(), columns.end(), column) - columns.begin());
+    return values(row, k);
+  }
+};
+
+EvaluationTable evaluation_table(const fs::path& file) {
+  const rsw::fem::Hdf5File h5(file, rsw::fem::Hdf5Mode::read);
+  EvaluationTable table;
+  table.columns = nlohmann::json::parse(h5.string_attribute("/evaluations/table", "columns")).get<std::vector<std::string>>();
+  table.values = h5.read_matrix("/evaluations/table");
+  return table;
 }
 
 bool has_line_starting(const std::string& text, const std::string& start) {
@@ -273,6 +326,195 @@ TEST(CalibrateCli, BadObservationFileExitsWithCodeTwoNamingKeyFileAndLine) {
             std::string::npos)
       << r.output;
   EXPECT_FALSE(fs::exists(dir / "out" / "bad_calibration"));
+  fs::remove_all(dir);
+}
+
+// `rsw study run` of a 12-point LHS, then `rsw calibrate` of the same study file with
+// calibration.initial_runs naming it: the 12 runs are SBALC's initial design (batch 0;
+// the first GP holds the successful ones and, imputed, the failed ones) and no θ of
+// the study is run again.
+TEST(CalibrateCli, StartsFromTheRunsOfAnEarlierStudy) {
+  const fs::path dir = fresh_dir("initial_runs");
+  write_file(dir / "case.yaml", "analytic: {function: smooth, fail_above: 0.85}\n");
+  const fs::path study = write_initial_runs_study(dir, "sens", "sens.yaml");
+  const fs::path out = dir / "out";
+  CommandResult r = run_rsw("study run " + study.string() + " -q -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  const rsw::calibration::StudyResults earlier = rsw::calibration::read_study_results(out / "sens.h5");
+  ASSERT_EQ(earlier.n_points(), 12u);
+  // The runs with a > 0.85 failed (LHS: one or two of the 12 strata of a lie above it).
+  int n_failed = 0;
+  for (Eigen::Index i = 0; i < 12; ++i) {
+    const bool fails = earlier.points(i, 0) > 0.85;
+    n_failed += fails ? 1 : 0;
+    ASSERT_EQ(earlier.status[static_cast<std::size_t>(i)], fails ? rsw::calibration::StudyResults::Status::failed
+                                                                 : rsw::calibration::StudyResults::Status::ok);
+  }
+  ASSERT_GT(n_failed, 0);
+  const std::string failed = std::to_string(n_failed), ok = std::to_string(12 - n_failed);
+
+  r = run_rsw("calibrate " + study.string() + " --workers 2 --no-plots -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("calibration sens: initial design from " + (out / "sens.h5").string() + ": 12 runs (" + ok +
+                          " ok, " + failed + " failed)\n"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("calibration sens: batch 0, 12 runs (0 new, 12 from the study, 0 reused, " + failed +
+                          " failed)"),
+            std::string::npos)
+      << r.output;
+  const auto json = nlohmann::json::parse(read_file(out / "sens_calibration.json"));
+  EXPECT_TRUE(json["converged"].get<bool>()) << r.output;
+  EXPECT_EQ(json["n_from_study"], 12);
+  EXPECT_EQ(json["n_reused"], 0);
+  EXPECT_EQ(json["initial_runs"]["n_runs"], 12);
+  EXPECT_NEAR(json["parameters"][0]["mean"].get<double>(), 0.3, 0.05);  // as without the study's runs
+  // The first GP: the ok runs as data points, the failed ones imputed (impute_minimum).
+  const std::string diagnostics = read_file(out / "sens_diagnostics.csv");
+  std::istringstream lines(diagnostics);
+  std::string header, first;
+  std::getline(lines, header);
+  std::getline(lines, first);
+  const auto field = [](const std::string& line, const std::string& header_line, const std::string& name) {
+    std::vector<std::string> names, values;
+    std::istringstream h(header_line), v(line);
+    for (std::string x; std::getline(h, x, ',');) names.push_back(x);
+    for (std::string x; std::getline(v, x, ',');) values.push_back(x);
+    return values.at(static_cast<std::size_t>(std::find(names.begin(), names.end(), name) - names.begin()));
+  };
+  EXPECT_EQ(field(first, header, "iteration"), "0");
+  EXPECT_EQ(field(first, header, "n_points"), ok) << first;
+  EXPECT_EQ(field(first, header, "n_imputed"), failed) << first;
+  EXPECT_EQ(field(first, header, "n_evaluations"), "12") << first;
+
+  // The first 12 evaluations are the study's runs in order, θ as stored, u = θ (uniform
+  // priors on [0, 1]); the rest are SBALC's own.
+  const int n_evaluations = json["n_evaluations"].get<int>();
+  const EvaluationTable table = evaluation_table(out / "sens_calibration.h5");
+  ASSERT_EQ(table.values.n_rows, static_cast<std::size_t>(n_evaluations));
+  for (std::size_t i = 0; i < table.values.n_rows; ++i) {
+    EXPECT_EQ(table(i, "from_study"), i < 12 ? 1.0 : 0.0) << i;
+    if (i >= 12) continue;
+    const auto ii = static_cast<Eigen::Index>(i);
+    EXPECT_EQ(table(i, "batch"), 0.0);
+    EXPECT_EQ(table(i, "theta:a"), earlier.points(ii, 0)) << i;
+    EXPECT_EQ(table(i, "theta:b"), earlier.points(ii, 1)) << i;
+    EXPECT_EQ(table(i, "u:a"), earlier.points(ii, 0)) << i;
+    EXPECT_EQ(table(i, "ok"), earlier.points(ii, 0) > 0.85 ? 0.0 : 1.0) << i;
+    if (earlier.points(ii, 0) <= 0.85) {
+      EXPECT_EQ(table(i, "y:R_beta"), earlier.features(ii, 0)) << i;
+    }
+  }
+  // What the calibration ran: each of its other runs once, none of the study's points.
+  std::size_t n_run = 0;
+  for (const auto& entry : fs::directory_iterator(out / "sens_calibration/evaluations")) {
+    const rsw::calibration::StudyResults runs = rsw::calibration::read_study_results(entry.path());
+    n_run += runs.n_points();
+    for (Eigen::Index i = 0; i < runs.points.rows(); ++i)
+      for (Eigen::Index k = 0; k < earlier.points.rows(); ++k)
+        EXPECT_FALSE(runs.points.row(i) == earlier.points.row(k)) << entry.path() << " runs study point " << k;
+  }
+  EXPECT_EQ(n_run, static_cast<std::size_t>(n_evaluations - 12));
+  EXPECT_EQ(rsw::calibration::read_study_results(out / "sens_calibration/evaluations/runs_0000.h5").n_points(), 3u)
+      << "the first file holds SBALC's first batch";
+
+  // --resume replays it: the study's runs again from the study, the rest from the cache.
+  const std::string posterior = read_file(out / "sens_posterior.csv");
+  r = run_rsw("calibrate " + study.string() + " -q --no-plots --resume -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("after " + std::to_string(n_evaluations) + " runs (12 from the study, " +
+                          std::to_string(n_evaluations - 12) + " reused, "),
+            std::string::npos)
+      << r.output;
+  EXPECT_EQ(read_file(out / "sens_posterior.csv"), posterior);
+  fs::remove_all(dir);
+}
+
+// A prior narrower than the study's: the runs outside it are skipped with a note, the
+// rest mapped into the unit cube through the calibration's priors, and Hammersley
+// points fill the initial design up to initial_points.
+TEST(CalibrateCli, InitialRunsOutsideANarrowerPriorAreSkipped) {
+  const fs::path dir = fresh_dir("narrower");
+  const fs::path study = write_initial_runs_study(dir, "sens", "sens.yaml");
+  CommandResult r = run_rsw("study run " + study.string() + " -q -o " + (dir / "out").string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  const rsw::calibration::StudyResults earlier = rsw::calibration::read_study_results(dir / "out/sens.h5");
+  int n_outside = 0;
+  for (Eigen::Index i = 0; i < earlier.points.rows(); ++i) n_outside += earlier.points(i, 0) > 0.5 ? 1 : 0;
+  ASSERT_GT(n_outside, 0);
+  const int n_inside = 12 - n_outside;
+  ASSERT_LT(n_inside, 9);
+  const fs::path narrow = write_initial_runs_study(dir, "narrow", "out/sens.h5", R"(
+  - {name: a, config_key: test.a, prior: uniform, lower: 0, upper: 0.5}
+  - {name: b, config_key: test.b, prior: uniform, lower: 0, upper: 1})", "", "{batch_size: 3, max_evaluations: 60, initial_points: 9}");
+  r = run_rsw("calibrate " + narrow.string() + " --no-plots -o " + (dir / "narrow_out").string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  const std::string n = std::to_string(n_outside);
+  EXPECT_NE(r.output.find(": " + std::to_string(n_inside) + " runs (" + std::to_string(n_inside) +
+                          " ok, 0 failed) and " + std::to_string(9 - n_inside) + " Hammersley points\n"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("  note: the prior of a is uniform [0, 0.5] here, uniform [0, 1] in the study\n"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("  note: " + n + " runs outside the calibration's prior box skipped (" + n +
+                          " with a outside uniform [0, 0.5])\n"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("batch 0, 9 runs (" + std::to_string(9 - n_inside) + " new on "), std::string::npos)
+      << r.output;
+  const EvaluationTable table = evaluation_table(dir / "narrow_out/narrow_calibration.h5");
+  std::size_t row = 0;
+  for (Eigen::Index i = 0; i < earlier.points.rows(); ++i) {
+    if (earlier.points(i, 0) > 0.5) continue;
+    EXPECT_EQ(table(row, "from_study"), 1.0);
+    EXPECT_EQ(table(row, "theta:a"), earlier.points(i, 0));
+    EXPECT_NEAR(table(row, "u:a"), earlier.points(i, 0) / 0.5, 1e-15);  // u = F(θ) of uniform [0, 0.5]
+    ++row;
+  }
+  EXPECT_EQ(table(row, "from_study"), 0.0);
+  fs::remove_all(dir);
+}
+
+TEST(CalibrateCli, InitialRunsOfAnotherSetUpAreRefused) {
+  const fs::path dir = fresh_dir("refused");
+  const fs::path study = write_initial_runs_study(dir, "sens", "sens.yaml");
+  CommandResult r = run_rsw("study run " + study.string() + " -q -o " + (dir / "out").string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  const std::string file = (dir / "out/sens.h5").string();
+  write_file(dir / "other_case.yaml", "analytic: {function: smooth, delay: 0 ms}\n");
+  struct Case {
+    fs::path study;
+    std::string message;
+  };
+  const std::vector<Case> cases = {
+      {write_initial_runs_study(dir, "model", "out/sens.h5", "", "", "{batch_size: 3, max_evaluations: 60}",
+                                "other_case.yaml"),
+       "calibration.initial_runs = out/sens.h5: study results file '" + file +
+           "' holds runs of another forward model set-up: 'case fnv1a64:"},
+      {write_initial_runs_study(dir, "names", "out/sens.h5", R"(
+  - {name: a, config_key: test.a, prior: uniform, lower: 0, upper: 1}
+  - {name: c, config_key: test.c, prior: uniform, lower: 0, upper: 1})"),
+       "study results file '" + file + "' has the parameters (a, b), the calibration (a, c)"},
+      {write_initial_runs_study(dir, "units", "out/sens.h5", R"(
+  - {name: a, config_key: test.a, prior: uniform, lower: 0, upper: 1}
+  - {name: b, config_key: test.b, unit: m, prior: uniform, lower: 0, upper: 1})"),
+       "sets parameter 'b' as test.b [1], the calibration as test.b [m]"},
+      {write_initial_runs_study(dir, "features", "out/sens.h5", "", "[{name: R_beta}, {name: T_max}]"),
+       "has no feature T_max (it has R_beta, dS_P)"},
+      {write_initial_runs_study(dir, "cap", "out/sens.h5", "", "", "{max_evaluations: 12}"),
+       "calibration.sbalc.max_evaluations = 12: the initial design holds 12 runs of " + file +
+           " (calibration.initial_runs), and the cap counts them; allowed: more than 12"},
+      {write_initial_runs_study(dir, "missing", "out/none.h5"),
+       "calibration.initial_runs = out/none.h5: no such file (looked for " + (dir / "out/none.h5").string()},
+  };
+  for (const Case& c : cases) {
+    r = run_rsw("calibrate " + c.study.string() + " -q --no-plots -o " + (dir / "refused_out").string());
+    EXPECT_EQ(r.status, 2) << c.study << "\n" << r.output;
+    EXPECT_NE(r.output.find(c.message), std::string::npos) << c.study << "\n" << r.output;
+    EXPECT_NE(r.output.find(c.study.filename().string() + ":"), std::string::npos) << r.output;  // where it was set
+  }
+  EXPECT_FALSE(fs::exists(dir / "refused_out"));
   fs::remove_all(dir);
 }
 
