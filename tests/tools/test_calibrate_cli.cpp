@@ -20,6 +20,8 @@
 #include "calibration/farm.hpp"
 #include "fem/hdf5_file.hpp"
 
+#include "tests/tools/cli_support.hpp"
+
 #include <nlohmann/json.hpp>
 
 #include <gtest/gtest.h>
@@ -46,41 +48,16 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct CommandResult {
-  int status = -1;
-  std::string output;  // stdout and stderr
-};
-
-CommandResult run_command(const std::string& command) {
-  CommandResult r;
-  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen((command + " 2>&1").c_str(), "r"), pclose);
-  std::array<char, 4096> buf;
-  while (fgets(buf.data(), buf.size(), pipe.get())) r.output += buf.data();
-  r.status = WEXITSTATUS(pclose(pipe.release()));
-  return r;
-}
+using rsw::testing::CommandResult;
+using rsw::testing::read_file;
+using rsw::testing::run_command;
+using rsw::testing::write_file;
 
 CommandResult run_rsw(const std::string& args) { return run_command(std::string(RSW_ANALYTIC_BINARY) + " " + args); }
 
-fs::path fresh_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("rsw_calibrate_cli_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
+fs::path fresh_dir(const std::string& name) { return rsw::testing::fresh_dir("rsw_calibrate_cli", name); }
 
-fs::path write_file(const fs::path& path, const std::string& text) {
-  std::ofstream out(path);
-  out << text;
-  return path;
-}
 
-std::string read_file(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 // The smooth analytic model y_k = (k + 1) a + Σ_i cos((k + 1)(i + 1) θ_i / 7) of two
 // parameters on [0, 1], observed three times near θ = (0.3, 0.6) (y = 2.28442,

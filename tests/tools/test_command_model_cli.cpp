@@ -12,6 +12,8 @@
 //   - `rsw calibrate` on a two-parameter Gaussian problem gives the posterior mean and
 //     standard deviation and the evidence of the closed form (derived below);
 //   - bad model.command values are input errors (exit code 2) naming the key.
+#include "tests/tools/cli_support.hpp"
+
 #include <nlohmann/json.hpp>
 
 #include <gtest/gtest.h>
@@ -37,41 +39,16 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct CommandResult {
-  int status = -1;
-  std::string output;  // stdout and stderr
-};
-
-CommandResult run_command(const std::string& command) {
-  CommandResult r;
-  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen((command + " 2>&1").c_str(), "r"), pclose);
-  std::array<char, 4096> buf;
-  while (fgets(buf.data(), buf.size(), pipe.get())) r.output += buf.data();
-  r.status = WEXITSTATUS(pclose(pipe.release()));
-  return r;
-}
+using rsw::testing::CommandResult;
+using rsw::testing::read_file;
+using rsw::testing::run_command;
+using rsw::testing::write_file;
 
 CommandResult run_rsw(const std::string& args) { return run_command(std::string(RSW_BINARY) + " " + args); }
 
-fs::path fresh_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("rsw_command_cli_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
+fs::path fresh_dir(const std::string& name) { return rsw::testing::fresh_dir("rsw_command_cli", name); }
 
-fs::path write_file(const fs::path& path, const std::string& text) {
-  std::ofstream out(path);
-  out << text;
-  return path;
-}
 
-std::string read_file(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 // The model script, copied next to the study file (so that the study names it
 // relative to its own folder, as a user's would).
