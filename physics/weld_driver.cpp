@@ -99,7 +99,7 @@ RunResult WeldDriver::run() {
   if (const std::string failure = squeeze(); !failure.empty()) return fail(failure);
   setup_weld();
   clock_.start("output");
-  if (std::abs(0.0 - next_output_ * problem_.output.interval) < 1e-9 || 0.0 >= times_.back() - 1e-12) {
+  if (is_output_time(0.0)) {
     record(0.0);
     ++next_output_;
   }
@@ -134,6 +134,10 @@ RunResult WeldDriver::fail(const std::string& message) {
   std::ofstream(partial_ / "failure.txt") << result_.message << "\n";
   result_.wall_time = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start_).count();
   return result_;
+}
+
+bool WeldDriver::is_output_time(double t) const {
+  return std::abs(t - next_output_ * problem_.output.interval) < 1e-9 || t >= times_.back() - 1e-12;
 }
 
 std::string WeldDriver::step_label(std::size_t k) const {
@@ -438,11 +442,10 @@ std::string WeldDriver::weld_step(std::size_t k) {
                                               peak_temperature(), sheet_bodies_, liquidus_, body_materials_,
                                               problem_.thermal.initial_temperature) /
                               last_.electrical_energy;
-  const double interval = problem_.output.interval;
-  if (std::abs(t - next_output_ * interval) < 1e-9 || t >= times_.back() - 1e-12) {
+  if (is_output_time(t)) {
     clock_.start("output");
     record(t);
-    while (next_output_ * interval <= t + 1e-9) ++next_output_;
+    while (next_output_ * problem_.output.interval <= t + 1e-9) ++next_output_;
   }
   return {};
 }
