@@ -62,9 +62,9 @@ struct RunResult {
   int n_steps = 0;
   int n_newton_iterations = 0;
   int n_coupling_iterations = 0;    // electro-thermal iterations, summed over steps
-  int n_mechanics_substepped = 0;   // mechanics retries with sub-steps (see run_weld)
-  int n_mechanics_loose = 0;        // smallest sub-steps accepted at a stalled residual (see run_weld)
-  int n_coupling_retries = 0;       // electro-thermal solves retried (other depth, damping; see run_weld)
+  int n_mechanics_substepped = 0;   // mechanics sub-steps made by halving (mechanics_stepper.hpp)
+  int n_mechanics_loose = 0;        // smallest sub-steps accepted at a stalled residual (mechanics_stepper.hpp)
+  int n_coupling_retries = 0;       // electro-thermal solves retried (electro_thermal_step.hpp)
   double dynamic_resistance_peak = 0;  // Ω, the largest V/I over every weld step with current
   // Linear algebra of the mechanics (gmres_iterations, factorisations, surrogates,
   // lu_factorisations, cell_matrices_scattered, cell_matrices_reused; see
