@@ -11,6 +11,7 @@
 #include "fem/config.hpp"
 #include "fem/threads.hpp"
 #include "materials/material_library.hpp"
+#include "tools/run_cli.hpp"
 #include "tools/config_commands.hpp"
 #include "tools/calibrate_command.hpp"
 #include "tools/mesh_command.hpp"
@@ -57,16 +58,5 @@ int main(int argc, char** argv) {
   rsw::tools::add_calibrate_command(app, rsw::tools::make_weld_model);
   rsw::tools::add_features_command(app);
   add_config_commands(app);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  } catch (const rsw::fem::ConfigError& e) {
-    std::fprintf(stderr, "rsw: error: %s\n", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "rsw: error: %s\n", e.what());
-    return 1;
-  }
-  return 0;
+  return rsw::tools::run_cli(app, argc, argv);
 }

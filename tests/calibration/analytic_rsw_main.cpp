@@ -10,6 +10,7 @@
 // displacement S(t) = 10 y_1 · (t/150 ms) µm during the current follow the first feature
 // y_1 of the model at θ, so runs at different θ give visibly different curves.
 #include "tests/calibration/analytic_models.hpp"
+#include "tools/run_cli.hpp"
 #include "tools/calibrate_command.hpp"
 #include "tools/study_commands.hpp"
 
@@ -77,16 +78,5 @@ int main(int argc, char** argv) {
   rsw::tools::add_study_commands(app, rsw::testing::make_analytic_model);
   rsw::tools::add_features_command(app);
   rsw::tools::add_calibrate_command(app, make_analytic_signal_model);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  } catch (const rsw::fem::ConfigError& e) {
-    std::fprintf(stderr, "rsw: error: %s\n", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "rsw: error: %s\n", e.what());
-    return 1;
-  }
-  return 0;
+  return rsw::tools::run_cli(app, argc, argv);
 }
