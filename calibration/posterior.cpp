@@ -29,6 +29,19 @@ double weighted_quantile(const Eigen::VectorXd& values, const Eigen::VectorXd& w
 
 }  // namespace
 
+Eigen::VectorXd weighted_quantiles(const Eigen::VectorXd& values, const Eigen::VectorXd& weights,
+                                   const std::vector<double>& probabilities) {
+  if (values.size() == 0 || values.size() != weights.size())
+    throw std::invalid_argument("weighted_quantiles: values and weights must be non-empty and of one size");
+  std::vector<Eigen::Index> order(static_cast<std::size_t>(values.size()));
+  std::iota(order.begin(), order.end(), Eigen::Index{0});
+  std::stable_sort(order.begin(), order.end(), [&](Eigen::Index a, Eigen::Index b) { return values(a) < values(b); });
+  Eigen::VectorXd quantiles(static_cast<Eigen::Index>(probabilities.size()));
+  for (std::size_t k = 0; k < probabilities.size(); ++k)
+    quantiles(static_cast<Eigen::Index>(k)) = weighted_quantile(values, weights, order, probabilities[k]);
+  return quantiles;
+}
+
 SirPosterior::SirPosterior(Eigen::MatrixXd pool, Eigen::VectorXd log_likelihoods, PosteriorOptions options,
                            std::function<double(const Eigen::VectorXd&)> log_density)
     : pool_(std::move(pool)),
@@ -55,6 +68,15 @@ SirPosterior::SirPosterior(const SbalcResult& sbalc, PosteriorOptions options)
     const GaussianProcess gp = *sbalc.surrogate;
     log_density_ = [gp](const Eigen::VectorXd& theta) { return gp.predict(theta).mean(0); };
   }
+}
+
+SirPosterior::SirPosterior(Eigen::MatrixXd pool, Eigen::VectorXd log_likelihoods, Eigen::VectorXd log_pool_weights,
+                           PosteriorOptions options, std::function<double(const Eigen::VectorXd&)> log_density)
+    : SirPosterior(std::move(pool), std::move(log_likelihoods), options, std::move(log_density)) {
+  if (log_pool_weights.size() != pool_.rows())
+    throw std::invalid_argument("SirPosterior: " + std::to_string(pool_.rows()) + " pool points but " +
+                                std::to_string(log_pool_weights.size()) + " pool weights");
+  log_pool_weights_ = std::move(log_pool_weights);
 }
 
 PosteriorResult SirPosterior::run() const {

@@ -67,6 +67,11 @@ struct PosteriorResult {
   bool map_refined = false;
 };
 
+// The weighted quantiles of `values` (weights ≥ 0, summing to 1) at each probability:
+// the smallest value whose cumulative weight reaches it.
+Eigen::VectorXd weighted_quantiles(const Eigen::VectorXd& values, const Eigen::VectorXd& weights,
+                                   const std::vector<double>& probabilities);
+
 class SirPosterior {
  public:
   // pool: N × d prior samples; log_likelihoods: ℓ_i at the pool points (finite or −∞).
@@ -76,6 +81,10 @@ class SirPosterior {
   // The SBALC pool with ℓ = GP latent mean (weights times the pool's prior/proposal
   // ratio if the pool is adaptive, sbalc.hpp); the MAP is refined on the GP mean.
   explicit SirPosterior(const SbalcResult& sbalc, PosteriorOptions options = {});
+  // A pool drawn from a proposal q instead of the prior: log_pool_weights = ln(prior/q)
+  // per point (the emulator route's importance pool, tempered_smc.hpp).
+  SirPosterior(Eigen::MatrixXd pool, Eigen::VectorXd log_likelihoods, Eigen::VectorXd log_pool_weights,
+               PosteriorOptions options, std::function<double(const Eigen::VectorXd&)> log_density = {});
 
   PosteriorResult run() const;
 

@@ -16,3 +16,9 @@ add_executable(test_calibration_sbalc
   ${CMAKE_CURRENT_LIST_DIR}/test_sbalc_guards.cpp)
 target_link_libraries(test_calibration_sbalc PRIVATE rsw_calibration GTest::gtest_main)
 gtest_discover_tests(test_calibration_sbalc PROPERTIES LABELS verification DISCOVERY_TIMEOUT 60)
+
+add_executable(test_calibration_emulator
+  ${CMAKE_CURRENT_LIST_DIR}/test_tempered_smc.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/test_emulator_calibration.cpp)
+target_link_libraries(test_calibration_emulator PRIVATE rsw_calibration GTest::gtest_main)
+gtest_discover_tests(test_calibration_emulator PROPERTIES LABELS verification DISCOVERY_TIMEOUT 60)

@@ -1,0 +1,285 @@
+// The emulator route's loop; algorithm, checks and sources in emulator_calibration.hpp.
+#include "calibration/emulator_calibration.hpp"
+
+#include "calibration/designs.hpp"
+#include "calibration/posterior.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <utility>
+
+namespace rsw::calibration {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+constexpr double not_a_number = std::numeric_limits<double>::quiet_NaN();
+
+std::string shortest(double value) {
+  std::ostringstream out;
+  out.precision(3);
+  out << value;
+  return out.str();
+}
+
+// The runs so far: successful points and features, failed points.
+struct Runs {
+  std::vector<Eigen::VectorXd> points;
+  std::vector<Eigen::VectorXd> features;
+  std::vector<Eigen::VectorXd> failed;
+  int n_evaluations = 0;
+
+  void add(const std::vector<Eigen::VectorXd>& thetas, const std::vector<std::optional<Eigen::VectorXd>>& values,
+           Eigen::Index n_features) {
+    if (values.size() != thetas.size())
+      throw std::runtime_error("emulator calibration: the evaluator returned " + std::to_string(values.size()) +
+                               " results for " + std::to_string(thetas.size()) + " points");
+    for (std::size_t k = 0; k < thetas.size(); ++k) {
+      ++n_evaluations;
+      if (values[k] && values[k]->size() == n_features && values[k]->allFinite()) {
+        points.push_back(thetas[k]);
+        features.push_back(*values[k]);
+      } else {
+        failed.push_back(thetas[k]);
+      }
+    }
+  }
+
+  Eigen::MatrixXd point_matrix() const { return stack(points); }
+  Eigen::MatrixXd feature_matrix() const { return stack(features); }
+
+  static Eigen::MatrixXd stack(const std::vector<Eigen::VectorXd>& rows) {
+    if (rows.empty()) return {};
+    Eigen::MatrixXd matrix(static_cast<Eigen::Index>(rows.size()), rows.front().size());
+    for (std::size_t r = 0; r < rows.size(); ++r) matrix.row(static_cast<Eigen::Index>(r)) = rows[r].transpose();
+    return matrix;
+  }
+};
+
+std::vector<Eigen::VectorXd> rows_of(const Eigen::MatrixXd& matrix) {
+  std::vector<Eigen::VectorXd> rows;
+  for (Eigen::Index r = 0; r < matrix.rows(); ++r) rows.emplace_back(matrix.row(r).transpose());
+  return rows;
+}
+
+// a(u) = Σ_j s_j²(u) / (V_j/N + τ_j²) at each point.
+Eigen::VectorXd acquisition(const FeatureEmulator& emulator, const Eigen::MatrixXd& points,
+                            const Eigen::VectorXd& irreducible) {
+  const FeaturePrediction prediction = emulator.predict(points);
+  return prediction.latent_variance * irreducible.cwiseInverse();
+}
+
+// batch_size points among the candidates, each the maximiser of a(u) after the points
+// before it (and the failed runs) were believed into the emulators.
+Eigen::MatrixXd choose_batch(FeatureEmulator emulator, const Eigen::MatrixXd& candidates,
+                             const std::vector<Eigen::VectorXd>& failed, const Eigen::VectorXd& irreducible, int count) {
+  for (const Eigen::VectorXd& point : failed) emulator = emulator.with_believed_point(point);
+  Eigen::MatrixXd chosen(count, candidates.cols());
+  for (int k = 0; k < count; ++k) {
+    Eigen::Index best = 0;
+    acquisition(emulator, candidates, irreducible).maxCoeff(&best);
+    chosen.row(k) = candidates.row(best);
+    if (k + 1 < count) emulator = emulator.with_believed_point(candidates.row(best).transpose());
+  }
+  return chosen;
+}
+
+}  // namespace
+
+GaussianProcessOptions EmulatorCalibrationOptions::default_gp() {
+  GaussianProcessOptions gp;
+  gp.kernel = KernelType::Matern52;
+  gp.trend = TrendType::DiagonalQuadratic;
+  gp.nugget_mode = NuggetMode::Estimated;
+  gp.n_restarts = 2;
+  return gp;
+}
+
+EmulatorCalibration::EmulatorCalibration(int dimension, BatchFeatureFunction evaluate, GaussianLikelihood likelihood,
+                                         EmulatorCalibrationOptions options)
+    : dimension_(dimension), evaluate_(std::move(evaluate)), likelihood_(std::move(likelihood)),
+      options_(std::move(options)) {
+  if (dimension_ < 1) throw std::invalid_argument("EmulatorCalibration: dimension must be >= 1");
+  if (!evaluate_) throw std::invalid_argument("EmulatorCalibration: no evaluator");
+  if (options_.batch_size < 1) throw std::invalid_argument("EmulatorCalibration: batch_size must be >= 1");
+  if (options_.n_consecutive < 1) throw std::invalid_argument("EmulatorCalibration: n_consecutive must be >= 1");
+  if (!(options_.variance_tolerance > 0.0) || !(options_.quantile_tolerance > 0.0))
+    throw std::invalid_argument("EmulatorCalibration: tolerances must be positive");
+  if (options_.initial_design && options_.initial_design->cols() != dimension_)
+    throw std::invalid_argument("EmulatorCalibration: the initial design has " +
+                                std::to_string(options_.initial_design->cols()) + " columns, the problem " +
+                                std::to_string(dimension_) + " dimensions");
+}
+
+EmulatorCalibrationResult EmulatorCalibration::run() const {
+  const int d = dimension_;
+  const Eigen::Index p = likelihood_.n_features();
+  const EmulatedLikelihood emulated(likelihood_);
+  EmulatorCalibrationResult result;
+  result.pool_ess_threshold =
+      std::max(options_.min_pool_ess, options_.min_pool_ess_fraction * static_cast<double>(options_.pool_size));
+
+  Eigen::MatrixXd initial;
+  if (options_.initial_design) {
+    initial = *options_.initial_design;
+  } else {
+    LatinHypercubeOptions lhs;
+    lhs.n_maximin_swaps = 2000;
+    const int n = options_.n_initial > 0 ? options_.n_initial : 10 * d;
+    initial = latin_hypercube(static_cast<std::size_t>(n), static_cast<std::size_t>(d), options_.seed, lhs);
+  }
+  if (initial.rows() >= options_.max_evaluations)
+    throw std::invalid_argument("EmulatorCalibration: the initial design of " + std::to_string(initial.rows()) +
+                                " runs leaves no room under the cap of " + std::to_string(options_.max_evaluations));
+  Runs runs;
+  {
+    const std::vector<Eigen::VectorXd> thetas = rows_of(initial);
+    runs.add(thetas, evaluate_(thetas), p);
+  }
+  if (runs.points.size() < 2)
+    throw std::runtime_error("emulator calibration: " + std::to_string(runs.points.size()) + " of " +
+                             std::to_string(initial.rows()) +
+                             " runs of the initial design succeeded; the emulators need two or more");
+
+  std::optional<FeatureEmulator> emulator;
+  int consecutive = 0, previous_points = 0;
+  const std::vector<double> probabilities{0.05, 0.5, 0.95};
+  for (int iteration = 0;; ++iteration) {
+    const Clock::time_point start = Clock::now();
+    EmulatorIteration it;
+    it.n_points = static_cast<int>(runs.points.size());
+    it.n_failed = static_cast<int>(runs.failed.size());
+    it.n_evaluations = runs.n_evaluations;
+    GaussianProcessOptions gp = options_.gp;
+    gp.seed = options_.seed * 7919 + static_cast<std::uint64_t>(iteration) * 104729;
+    emulator = FeatureEmulator(runs.point_matrix(), runs.feature_matrix(), gp, emulator ? &*emulator : nullptr);
+    const FeatureEmulator& current = *emulator;
+    const BatchLogDensity log_likelihood = [&](const Eigen::MatrixXd& points) {
+      return emulated.log_likelihood(current.predict(points));
+    };
+
+    TemperedSmcOptions smc = options_.smc;
+    smc.seed = options_.seed * 31 + static_cast<std::uint64_t>(iteration);
+    const TemperedSmcResult sampled = sample_tempered(d, log_likelihood, smc);
+    ImportanceOptions importance;
+    importance.n_samples = options_.pool_size;
+    importance.seed = options_.seed * 37 + static_cast<std::uint64_t>(iteration);
+    const ImportanceResult pool = importance_sample(sampled.particles, log_likelihood, importance);
+
+    it.log_evidence = pool.log_evidence;
+    it.evidence_relative_error = pool.relative_error;
+    it.smc_log_evidence = sampled.log_evidence;
+    it.n_temperatures = static_cast<int>(sampled.temperatures.size());
+    it.pool_ess = pool.effective_sample_size;
+    const Eigen::VectorXd log_weights = pool.log_likelihoods + pool.log_prior_over_proposal;
+    const double top = log_weights.maxCoeff();
+    Eigen::VectorXd weights = (log_weights.array() - top).exp().matrix();
+    weights /= weights.sum();
+    it.quantiles.resize(d, 3);
+    it.posterior_sd.resize(d);
+    for (int i = 0; i < d; ++i) {
+      const Eigen::VectorXd values = pool.points.col(i);
+      it.quantiles.row(i) = weighted_quantiles(values, weights, probabilities).transpose();
+      const double mean = values.dot(weights);
+      it.posterior_sd(i) = std::sqrt(std::max(0.0, (values.array() - mean).square().matrix().dot(weights)));
+    }
+    const FeaturePrediction at_particles = current.predict(sampled.particles);
+    const Eigen::VectorXd irreducible = emulated.mean_variances() + at_particles.noise_variance;
+    it.variance_ratios = at_particles.latent_variance.colwise().mean().transpose().cwiseQuotient(irreducible);
+    it.max_variance_ratio = it.variance_ratios.maxCoeff();
+    it.noise_standard_deviations = at_particles.noise_variance.cwiseSqrt();
+    it.quantile_shift = not_a_number;
+    if (!result.history.empty()) {
+      const EmulatorIteration& before = result.history.back();
+      double shift = 0.0;
+      for (int i = 0; i < d; ++i) {
+        const double sd = std::max(it.posterior_sd(i), 1e-12);
+        shift = std::max(shift, (it.quantiles.row(i) - before.quantiles.row(i)).cwiseAbs().maxCoeff() / sd);
+      }
+      it.quantile_shift = shift;
+    }
+    it.variance_settled = it.max_variance_ratio <= options_.variance_tolerance;
+    it.quantiles_settled = std::isfinite(it.quantile_shift) && it.quantile_shift <= options_.quantile_tolerance;
+    it.pool_ess_sufficient = it.pool_ess >= result.pool_ess_threshold;
+    const bool adds_data = iteration > 0 && it.n_points > previous_points;
+    if (adds_data) {
+      it.counted = it.variance_settled && it.quantiles_settled && it.pool_ess_sufficient;
+      consecutive = it.counted ? consecutive + 1 : 0;
+    }
+    previous_points = it.n_points;
+
+    result.pool = pool.points;
+    result.pool_log_likelihood = pool.log_likelihoods;
+    result.pool_log_weight = pool.log_prior_over_proposal;
+    result.log_evidence = pool.log_evidence;
+    result.evidence_relative_error = pool.relative_error;
+    result.pool_ess = pool.effective_sample_size;
+    result.particles = sampled.particles;
+
+    const int room = options_.max_evaluations - runs.n_evaluations;
+    if (consecutive >= options_.n_consecutive || room <= 0) {
+      result.converged = consecutive >= options_.n_consecutive;
+      result.stop_reason = result.converged
+                               ? "converged: the emulators' variance and the posterior quantiles settled on " +
+                                     std::to_string(options_.n_consecutive) + " iterations in a row"
+                               : "the cap of " + std::to_string(options_.max_evaluations) + " runs was reached";
+      it.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+      result.history.push_back(std::move(it));
+      break;
+    }
+    it.chosen_points = choose_batch(current, sampled.particles, runs.failed, irreducible,
+                                    std::min(options_.batch_size, room));
+    it.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    result.history.push_back(it);
+    const std::vector<Eigen::VectorXd> thetas = rows_of(it.chosen_points);
+    runs.add(thetas, evaluate_(thetas), p);
+  }
+
+  result.n_evaluations = runs.n_evaluations;
+  result.design = runs.point_matrix();
+  result.design_features = runs.feature_matrix();
+  for (const Eigen::VectorXd& point : runs.failed) result.failures.push_back({point});
+  result.emulator = std::move(emulator);
+
+  // Warnings, with what to do.
+  const EmulatorIteration& last = result.history.back();
+  if (!runs.failed.empty())
+    result.warnings.push_back(std::to_string(runs.failed.size()) + " of " + std::to_string(runs.n_evaluations) +
+                              " runs failed and are left out of the emulators");
+  for (Eigen::Index j = 0; j < p; ++j) {
+    const double data_se = std::sqrt(emulated.mean_variances()(j));
+    if (last.noise_standard_deviations(j) > data_se) {
+      result.warnings.push_back("feature " + likelihood_.feature_names()[static_cast<std::size_t>(j)] +
+                                ": the model's numerical noise (tau = " + shortest(last.noise_standard_deviations(j)) +
+                                ") exceeds the standard error of the observed mean (" + shortest(data_se) +
+                                "); the posterior is wider than the measurement noise alone allows");
+    }
+  }
+  if (!result.converged) {
+    std::string failing;
+    if (!last.variance_settled)
+      failing += "the emulators' variance ratio " + shortest(last.max_variance_ratio) + " > " +
+                 shortest(options_.variance_tolerance);
+    if (!last.quantiles_settled)
+      failing += std::string(failing.empty() ? "" : "; ") + "the quantile shift " + shortest(last.quantile_shift) +
+                 " posterior sd > " + shortest(options_.quantile_tolerance);
+    if (!last.pool_ess_sufficient)
+      failing += std::string(failing.empty() ? "" : "; ") + "the pool's effective sample size " +
+                 shortest(last.pool_ess) + " < " + shortest(result.pool_ess_threshold);
+    if (failing.empty()) failing = "the checks held on fewer than " + std::to_string(options_.n_consecutive) +
+                                   " counted iterations in a row";
+    result.warnings.push_back("not converged after " + std::to_string(runs.n_evaluations) + " runs (" + failing +
+                              "); continue with a larger evaluation cap and --resume");
+  } else if (!last.pool_ess_sufficient) {
+    result.warnings.push_back("the pool's effective sample size " + shortest(last.pool_ess) + " is below " +
+                              shortest(result.pool_ess_threshold));
+  }
+  return result;
+}
+
+}  // namespace rsw::calibration

@@ -1,0 +1,82 @@
+// Emulators of the features and the likelihood they imply (the "emulator" calibration
+// route, emulator_calibration.hpp; docs/CALIBRATION.md, "Two routes").
+//
+// One GP per feature j (gaussian_process.hpp: Matérn 5/2, a trend, an estimated nugget)
+// on the runs' unit-cube points u, fitted to the standardised values (y_j − ȳ_j)/sd_j of
+// the runs and mapped back, gives at u the latent mean m_j(u), the latent variance
+// s_j²(u) (the emulator's own uncertainty, shrinking as runs are added) and the nugget
+// τ_j² (the model's reproducible numerical noise, which no run removes). A feature is
+// smooth in θ where the log-likelihood of many features is not: it varies by a few
+// tens of per cent over the prior, while ℒ falls by thousands of units.
+//
+// The likelihood of the observations Y^(k)_j (k = 1 … N replicates, GaussianLikelihood:
+// variances V_j = σ_j² + δ_j² per replicate) when the model's feature is
+// M_j(u) = m_j(u) + e_j, e_j ~ N(0, s_j²(u) + τ_j²) shared by all replicates (one model
+// value per θ), is for each feature the Gaussian N(Y_j; M_j 1, V_j I + (s_j² + τ_j²) 11ᵀ),
+// whose determinant and inverse give, with Ȳ_j the replicates' mean and
+// S_j = Σ_k (Y^(k)_j − Ȳ_j)²,
+//     ln L̃(u) = Σ_j [ −S_j/(2V_j) − ((N − 1)/2) ln(2π V_j) − ½ ln N
+//                    − (Ȳ_j − m_j)²/(2 W_j) − ½ ln(2π W_j) ],   W_j = V_j/N + s_j² + τ_j².
+// With s_j = τ_j = 0 this is GaussianLikelihood::log_likelihood at M = m exactly, so the
+// route estimates the same posterior and evidence as SBALC where the emulator is exact;
+// elsewhere the emulator's uncertainty widens the likelihood instead of biasing it
+// (Kennedy & O'Hagan 2001, §4; Higdon et al. 2004, "Combining field data and computer
+// simulations for calibration and prediction").
+// Units: u dimensionless; m_j, s_j, τ_j, Y, σ in the feature's SI unit.
+#pragma once
+
+#include "calibration/gaussian_process.hpp"
+#include "calibration/likelihood.hpp"
+
+#include <Eigen/Core>
+
+#include <vector>
+
+namespace rsw::calibration {
+
+struct FeaturePrediction {
+  Eigen::MatrixXd mean;             // m × p, m_j at each point
+  Eigen::MatrixXd latent_variance;  // m × p, s_j²
+  Eigen::VectorXd noise_variance;   // p, τ_j²
+};
+
+class FeatureEmulator {
+ public:
+  // inputs: n × d unit-cube points; features: n × p finite values. `previous` (same p),
+  // if given, warm-starts each feature's hyperparameter search.
+  FeatureEmulator(const Eigen::MatrixXd& inputs, const Eigen::MatrixXd& features, const GaussianProcessOptions& options,
+                  const FeatureEmulator* previous = nullptr);
+
+  FeaturePrediction predict(const Eigen::MatrixXd& points) const;
+  // The same hyperparameters conditioned on one more point at each feature's own mean
+  // (kriging believer, Ginsbourger et al. 2010): means unchanged, variances shrink near x.
+  FeatureEmulator with_believed_point(const Eigen::VectorXd& x) const;
+
+  int n_features() const { return static_cast<int>(processes_.size()); }
+  int n_points() const { return processes_.empty() ? 0 : processes_.front().n_points(); }
+  const std::vector<GaussianProcess>& processes() const { return processes_; }
+  const Eigen::VectorXd& offsets() const { return offsets_; }  // ȳ_j
+  const Eigen::VectorXd& scales() const { return scales_; }    // sd_j
+
+ private:
+  FeatureEmulator() = default;
+  std::vector<GaussianProcess> processes_;
+  Eigen::VectorXd offsets_, scales_;
+};
+
+// ln L̃ above for the observations and noise of `likelihood`.
+class EmulatedLikelihood {
+ public:
+  explicit EmulatedLikelihood(const GaussianLikelihood& likelihood);
+
+  // ln L̃ at each point of a prediction (m values).
+  Eigen::VectorXd log_likelihood(const FeaturePrediction& prediction) const;
+  // V_j / N, the variance of the replicates' mean under the noise model.
+  const Eigen::VectorXd& mean_variances() const { return mean_variances_; }
+
+ private:
+  Eigen::VectorXd observed_mean_, mean_variances_;
+  double constant_ = 0.0;  // Σ_j [−S_j/(2V_j) − ((N − 1)/2) ln(2π V_j) − ½ ln N]
+};
+
+}  // namespace rsw::calibration

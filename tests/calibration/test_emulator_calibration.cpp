@@ -1,0 +1,130 @@
+// The emulator route (calibration/feature_emulator.hpp, emulator_calibration.hpp):
+//   - the emulated likelihood against the Gaussian likelihood and a hand value;
+//   - a linear-Gaussian model in six dimensions, whose posterior and evidence are
+//     derived in closed form below.
+#include "calibration/emulator_calibration.hpp"
+#include "calibration/feature_emulator.hpp"
+#include "calibration/likelihood.hpp"
+
+#include <Eigen/Dense>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+namespace rsw::calibration {
+namespace {
+
+TEST(EmulatedLikelihood, EqualsTheGaussianLikelihoodWhenTheEmulatorIsExact) {
+  Eigen::MatrixXd y(3, 2);
+  y << 1.0, 10.0, 1.2, 11.0, 0.9, 9.5;
+  const GaussianLikelihood likelihood({"a", "b"}, y, ObservationNoise::given({{"a", 0.1}, {"b", 0.7}}));
+  FeaturePrediction prediction;
+  prediction.mean.resize(2, 2);
+  prediction.mean << 1.05, 10.3, 0.7, 12.0;
+  prediction.latent_variance = Eigen::MatrixXd::Zero(2, 2);
+  prediction.noise_variance = Eigen::VectorXd::Zero(2);
+  const Eigen::VectorXd emulated = EmulatedLikelihood(likelihood).log_likelihood(prediction);
+  for (int r = 0; r < 2; ++r) {
+    EXPECT_NEAR(emulated(r), likelihood.log_likelihood(Eigen::VectorXd(prediction.mean.row(r).transpose())), 1e-10);
+  }
+}
+
+TEST(EmulatedLikelihood, EmulatorAndNoiseVariancesAddToTheVarianceOfTheObservedMean) {
+  // One replicate y = 2, σ = 0.2; m = 1.5, s² = 0.05, τ² = 0.01:
+  // W = 0.04 + 0.05 + 0.01 = 0.1, ln L̃ = −(0.5)²/(2 · 0.1) − ½ ln(2π · 0.1).
+  const GaussianLikelihood likelihood({"a"}, Eigen::MatrixXd::Constant(1, 1, 2.0),
+                                      ObservationNoise::given({{"a", 0.2}}));
+  FeaturePrediction prediction{Eigen::MatrixXd::Constant(1, 1, 1.5), Eigen::MatrixXd::Constant(1, 1, 0.05),
+                               Eigen::VectorXd::Constant(1, 0.01)};
+  const double expected = -0.25 / 0.2 - 0.5 * std::log(2.0 * M_PI * 0.1);
+  EXPECT_NEAR(EmulatedLikelihood(likelihood).log_likelihood(prediction)(0), expected, 1e-12);
+}
+
+// M(u) = b + A u, p = 8 features of d = 6 parameters, one replicate y with known σ:
+//     ℒ(u) = −½ (y − b − Au)ᵀ Σ⁻¹ (y − b − Au) − ½ ln det(2πΣ)
+// is quadratic: ℒ(u) = ℒ(û) − ½ (u − û)ᵀ P (u − û), P = AᵀΣ⁻¹A, û = P⁻¹AᵀΣ⁻¹(y − b).
+// The posterior is N(û, P⁻¹) truncated to the box, and with û more than 6 posterior
+// standard deviations from every face the truncation is below 1e-8, so
+//     ln Z = ℒ(û) + (d/2) ln 2π − ½ ln det P.
+struct LinearProblem {
+  int d = 6, p = 8;
+  Eigen::MatrixXd a;
+  Eigen::VectorXd b, sigma, y, mode, posterior_sd;
+  double log_evidence = 0.0;
+
+  explicit LinearProblem(std::uint64_t seed) {
+    std::mt19937_64 generator(seed);
+    std::normal_distribution<double> normal;
+    a.resize(p, d);
+    for (int i = 0; i < p; ++i)
+      for (int j = 0; j < d; ++j) a(i, j) = (i == j ? 2.0 : 0.0) + 0.4 * normal(generator);
+    b = Eigen::VectorXd::LinSpaced(p, 1.0, 2.0);
+    sigma = Eigen::VectorXd::Constant(p, 0.03);
+    Eigen::VectorXd truth(d);
+    for (int j = 0; j < d; ++j) truth(j) = 0.4 + 0.2 * (j % 3) / 2.0;
+    y = b + a * truth;
+    for (int i = 0; i < p; ++i) y(i) += sigma(i) * normal(generator);
+    const Eigen::MatrixXd weights = sigma.cwiseAbs2().cwiseInverse().asDiagonal();
+    const Eigen::MatrixXd precision = a.transpose() * weights * a;
+    mode = precision.ldlt().solve(a.transpose() * weights * (y - b));
+    posterior_sd = precision.inverse().diagonal().cwiseSqrt();
+    const Eigen::VectorXd r = y - b - a * mode;
+    const double at_mode = -0.5 * r.dot(weights * r) - 0.5 * (2.0 * M_PI * sigma.cwiseAbs2()).array().log().sum();
+    log_evidence = at_mode + 0.5 * d * std::log(2.0 * M_PI) - 0.5 * std::log(precision.determinant());
+  }
+
+  GaussianLikelihood likelihood() const {
+    std::vector<std::string> names;
+    std::map<std::string, double> sds;
+    for (int i = 0; i < p; ++i) {
+      names.push_back("f" + std::to_string(i));
+      sds[names.back()] = sigma(i);
+    }
+    return GaussianLikelihood(names, y.transpose(), ObservationNoise::given(sds));
+  }
+
+  BatchFeatureFunction model() const {
+    return [this](const std::vector<Eigen::VectorXd>& points) {
+      std::vector<std::optional<Eigen::VectorXd>> values;
+      for (const auto& u : points) values.emplace_back(Eigen::VectorXd(b + a * u));
+      return values;
+    };
+  }
+};
+
+TEST(EmulatorCalibration, RecoversTheClosedFormPosteriorAndEvidenceOfALinearModelInSixDimensions) {
+  const LinearProblem problem(11);
+  std::printf("posterior sd:");
+  for (int j = 0; j < problem.d; ++j) std::printf(" %.4f", problem.posterior_sd(j));
+  std::printf("\n");
+  for (int j = 0; j < problem.d; ++j) {
+    ASSERT_GT(std::min(problem.mode(j), 1.0 - problem.mode(j)), 6.0 * problem.posterior_sd(j));
+  }
+  EmulatorCalibrationOptions options;
+  options.max_evaluations = 100;
+  const EmulatorCalibrationResult result =
+      EmulatorCalibration(problem.d, problem.model(), problem.likelihood(), options).run();
+  std::printf("linear 6-D: %d runs, converged %d, ln Z %.4f (closed form %.4f), relative error %.4f, ESS %.0f\n",
+              result.n_evaluations, result.converged, result.log_evidence, problem.log_evidence,
+              result.evidence_relative_error, result.pool_ess);
+  for (const auto& it : result.history)
+    std::printf("  %d runs: ln Z %.3f (SMC %.3f), %d temperatures, variance ratio %.3g, quantile shift %.3g, ESS %.0f, %.1f s\n",
+                it.n_evaluations, it.log_evidence, it.smc_log_evidence, it.n_temperatures, it.max_variance_ratio,
+                it.quantile_shift, it.pool_ess, it.seconds);
+  for (const auto& warning : result.warnings) std::printf("  warning: %s\n", warning.c_str());
+  EXPECT_TRUE(result.converged);
+  EXPECT_NEAR(result.log_evidence, problem.log_evidence, std::log(1.05));
+  Eigen::VectorXd weights = (result.pool_log_likelihood + result.pool_log_weight).array().exp().matrix();
+  weights /= weights.sum();
+  const Eigen::VectorXd mean = result.pool.transpose() * weights;
+  for (int j = 0; j < problem.d; ++j) {
+    const double variance = (result.pool.col(j).array() - mean(j)).square().matrix().dot(weights);
+    EXPECT_NEAR(mean(j), problem.mode(j), 0.1 * problem.posterior_sd(j)) << "parameter " << j;
+    EXPECT_NEAR(std::sqrt(variance), problem.posterior_sd(j), 0.1 * problem.posterior_sd(j)) << "parameter " << j;
+  }
+}
+
+}  // namespace
+}  // namespace rsw::calibration
