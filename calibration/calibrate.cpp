@@ -282,13 +282,23 @@ Calibration::Calibration(const ForwardModel& model, StudyDesign design, Gaussian
   }
   if (options_.evaluations_folder.empty()) throw CalibrationError("calibration: no evaluation folder");
   const std::size_t n_initial_runs = options_.initial_runs.runs.size();
-  const auto n_design = static_cast<int>(std::max<std::size_t>(n_initial_runs, static_cast<std::size_t>(std::max(options_.sbalc.n_initial, 0))));
-  if (n_initial_runs > 0 && n_design >= options_.sbalc.max_evaluations) {
+  const auto n_design = static_cast<int>(std::max<std::size_t>(n_initial_runs, static_cast<std::size_t>(std::max(n_initial(), 0))));
+  if (n_initial_runs > 0 && n_design >= max_evaluations()) {
     throw CalibrationError("calibration '" + design_.name + "': the initial design holds " + std::to_string(n_design) +
                            " runs (" + std::to_string(n_initial_runs) + " of " + options_.initial_runs.file.string() +
-                           "), the evaluation cap is " + std::to_string(options_.sbalc.max_evaluations) +
+                           "), the evaluation cap is " + std::to_string(max_evaluations()) +
                            "; allowed: a cap above the initial design");
   }
+}
+
+int Calibration::n_initial() const {
+  if (options_.method == CalibrationMethod::sbalc) return options_.sbalc.n_initial;
+  const int n = options_.emulator.n_initial;
+  return n > 0 ? n : 10 * static_cast<int>(design_.parameters.n_parameters());
+}
+
+int Calibration::max_evaluations() const {
+  return options_.method == CalibrationMethod::sbalc ? options_.sbalc.max_evaluations : options_.emulator.max_evaluations;
 }
 
 CalibrationResult Calibration::run() const {
@@ -334,11 +344,11 @@ CalibrationResult Calibration::run() const {
 
   // Runs of an earlier study: the initial design in u (u_i = F_i(θ_i)), filled up with
   // Hammersley points to n_initial; SBALC finds them in the cache.
-  SbalcOptions sbalc_options = options_.sbalc;
+  std::optional<Eigen::MatrixXd> initial_design;
   if (!options_.initial_runs.runs.empty()) {
     const std::vector<InitialRun>& runs = options_.initial_runs.runs;
     const auto n_runs = static_cast<Eigen::Index>(runs.size());
-    const Eigen::Index n_fill = std::max<Eigen::Index>(0, sbalc_options.n_initial - n_runs);
+    const Eigen::Index n_fill = std::max<Eigen::Index>(0, n_initial() - n_runs);
     Eigen::MatrixXd initial(n_runs + n_fill, static_cast<Eigen::Index>(d));
     for (Eigen::Index r = 0; r < n_runs; ++r) {
       const InitialRun& run = runs[static_cast<std::size_t>(r)];
@@ -349,10 +359,11 @@ CalibrationResult Calibration::run() const {
       cache.insert_or_assign(key_of(unit_to_physical(parameters, initial.row(r).transpose())), std::move(cached));
     }
     if (n_fill > 0) initial.bottomRows(n_fill) = hammersley(static_cast<std::size_t>(n_fill), d);
-    sbalc_options.initial_design = initial;
+    initial_design = initial;
   }
 
   CalibrationResult result;
+  result.method = options_.method;
   result.parameter_names = parameters.names();
   for (std::size_t i = 0; i < d; ++i) result.parameter_units.push_back(parameters.parameter(i).unit);
   result.feature_names = design_.feature_names;
@@ -360,8 +371,9 @@ CalibrationResult Calibration::run() const {
   double best_log_likelihood = -std::numeric_limits<double>::infinity();
   Eigen::VectorXd best_theta;
 
-  const BatchLogLikelihoodFunction evaluate_batch =
-      [&](const std::vector<Eigen::VectorXd>& thetas_unit) -> std::vector<std::optional<double>> {
+  // Runs a batch (or finds it in the cache), records every run in the result and
+  // reports the batch; the two methods adapt what it returns.
+  const auto evaluate_runs = [&](const std::vector<Eigen::VectorXd>& thetas_unit) -> std::vector<CalibrationEvaluation> {
     const std::size_t batch = n_batches++;
     const Clock::time_point batch_start = Clock::now();
     std::vector<CalibrationEvaluation> runs(thetas_unit.size());
@@ -427,7 +439,6 @@ CalibrationResult Calibration::run() const {
       }
     }
 
-    std::vector<std::optional<double>> values;
     std::size_t n_failed = 0;
     for (CalibrationEvaluation& run : runs) {
       run.log_likelihood = not_a_number;
@@ -449,13 +460,11 @@ CalibrationResult Calibration::run() const {
         }
       }
       if (run.ok) {
-        values.emplace_back(run.log_likelihood);
         if (run.log_likelihood > best_log_likelihood) {
           best_log_likelihood = run.log_likelihood;
           best_theta = run.theta;
         }
       } else {
-        values.emplace_back(std::nullopt);
         ++n_failed;
       }
       if (run.reused) ++result.n_reused;
@@ -481,16 +490,36 @@ CalibrationResult Calibration::run() const {
       }
       out << "\n" << std::flush;
     }
-    return values;
+    return runs;
   };
 
-  SbalcResult sbalc;
+  PosteriorResult posterior;
   try {
-    sbalc = Sbalc(static_cast<int>(d), evaluate_batch, sbalc_options).run();
+    posterior = options_.method == CalibrationMethod::sbalc ? run_sbalc(evaluate_runs, initial_design, result)
+                                                            : run_emulator(evaluate_runs, initial_design, result);
   } catch (const AbortCalibration& abort) {
     if (abort.interrupted) throw CalibrationInterrupted(abort.message);
     throw CalibrationError(abort.message);
   }
+  summarise_posterior(posterior, result);
+  result.elapsed = std::chrono::duration<double>(Clock::now() - start).count();
+  return result;
+}
+
+PosteriorResult Calibration::run_sbalc(const RunBatch& evaluate_runs, const std::optional<Eigen::MatrixXd>& initial_design,
+                                       CalibrationResult& result) const {
+  const ParameterSpace& parameters = design_.parameters;
+  const std::size_t d = parameters.n_parameters();
+  SbalcOptions sbalc_options = options_.sbalc;
+  if (initial_design) sbalc_options.initial_design = *initial_design;
+  const BatchLogLikelihoodFunction evaluate_batch = [&](const std::vector<Eigen::VectorXd>& thetas_unit) {
+    std::vector<std::optional<double>> values;
+    for (const CalibrationEvaluation& run : evaluate_runs(thetas_unit)) {
+      values.push_back(run.ok ? std::optional<double>(run.log_likelihood) : std::nullopt);
+    }
+    return values;
+  };
+  const SbalcResult sbalc = Sbalc(static_cast<int>(d), evaluate_batch, sbalc_options).run();
   result.n_evaluations = result.evaluations.size();
   if (!sbalc.surrogate) {
     std::string reasons;
@@ -519,11 +548,87 @@ CalibrationResult Calibration::run() const {
   result.design_unit = sbalc.design;
   result.design_log_likelihoods = sbalc.log_likelihoods;
 
-  // SIR posterior of the pool, mapped to physical units.
-  const PosteriorResult posterior = SirPosterior(sbalc, options_.posterior).run();
-  result.pool = rows_to_physical(parameters, sbalc.pool);
-  result.pool_weights = posterior.weights;
+  // SIR posterior of the pool.
+  result.pool = sbalc.pool;
   result.pool_log_likelihood = sbalc.pool_mean;
+  return SirPosterior(sbalc, options_.posterior).run();
+}
+
+PosteriorResult Calibration::run_emulator(const RunBatch& evaluate_runs,
+                                          const std::optional<Eigen::MatrixXd>& initial_design,
+                                          CalibrationResult& result) const {
+  const std::size_t d = design_.parameters.n_parameters();
+  EmulatorCalibrationOptions emulator_options = options_.emulator;
+  if (initial_design) emulator_options.initial_design = *initial_design;
+  const BatchFeatureFunction evaluate_batch = [&](const std::vector<Eigen::VectorXd>& thetas_unit) {
+    std::vector<std::optional<Eigen::VectorXd>> values;
+    for (const CalibrationEvaluation& run : evaluate_runs(thetas_unit)) {
+      values.push_back(run.ok ? std::optional<Eigen::VectorXd>(run.features) : std::nullopt);
+    }
+    return values;
+  };
+  EmulatorCalibrationResult emulated;
+  try {
+    emulated = EmulatorCalibration(static_cast<int>(d), evaluate_batch, likelihood_, emulator_options).run();
+  } catch (const std::runtime_error& e) {
+    if (dynamic_cast<const CalibrationError*>(&e) != nullptr) throw;
+    std::string reasons;
+    for (const auto& run : result.evaluations) {
+      if (!run.ok && reasons.size() < 400)
+        reasons += "\n  " + format_theta(design_.parameters, run.theta) + ": " + run.failure_reason;
+    }
+    throw CalibrationError("calibration '" + design_.name + "': " + e.what() + reasons);
+  }
+  result.n_evaluations = result.evaluations.size();
+  result.converged = emulated.converged;
+  result.stop_reason = emulated.stop_reason;
+  result.log_evidence = emulated.log_evidence;
+  const double e = emulated.evidence_relative_error;
+  result.log_evidence_lower = e < 1.0 ? emulated.log_evidence + std::log1p(-e) : -std::numeric_limits<double>::infinity();
+  result.log_evidence_upper = emulated.log_evidence + std::log1p(e);
+  result.ratio = 2.0 * e;
+  result.noise_ratio = 0.0;
+  result.pool_ess = emulated.pool_ess;
+  result.pool_ess_threshold = emulated.pool_ess_threshold;
+  result.pool_relative_error = e;
+  result.warnings = emulated.warnings;
+  result.emulator_history = emulated.history;
+  result.feature_noise_standard_deviations = emulated.history.back().noise_standard_deviations;
+  result.design_unit = emulated.design;
+  result.design_log_likelihoods.resize(emulated.design.rows());
+  for (Eigen::Index r = 0; r < emulated.design.rows(); ++r)
+    result.design_log_likelihoods(r) = likelihood_.log_likelihood(Eigen::VectorXd(emulated.design_features.row(r).transpose()));
+
+  // SIR posterior of the importance pool; the MAP refined on the emulated likelihood.
+  result.pool = emulated.pool;
+  result.pool_log_likelihood = emulated.pool_log_likelihood;
+  const FeatureEmulator emulator = *emulated.emulator;
+  const EmulatedLikelihood likelihood(likelihood_);
+  const auto log_density = [emulator, likelihood](const Eigen::VectorXd& u) {
+    return likelihood.log_likelihood(emulator.predict(Eigen::MatrixXd(u.transpose())))(0);
+  };
+  return SirPosterior(emulated.pool, emulated.pool_log_likelihood, emulated.pool_log_weight, options_.posterior,
+                      log_density)
+      .run();
+}
+
+void Calibration::summarise_posterior(const PosteriorResult& posterior, CalibrationResult& result) const {
+  const ParameterSpace& parameters = design_.parameters;
+  const std::size_t d = parameters.n_parameters();
+  // Contraction in the unit cube (prior variance 1/12), before the pool goes physical.
+  result.contraction.resize(static_cast<Eigen::Index>(d));
+  result.identification.clear();
+  for (std::size_t i = 0; i < d; ++i) {
+    const auto ii = static_cast<Eigen::Index>(i);
+    const double mean = result.pool.col(ii).dot(posterior.weights);
+    const double variance = (result.pool.col(ii).array() - mean).square().matrix().dot(posterior.weights);
+    result.contraction(ii) = 1.0 - 12.0 * variance;
+    result.identification.emplace_back(result.contraction(ii) >= 0.75   ? "identified"
+                                       : result.contraction(ii) < 0.36 ? "not identified"
+                                                                       : "weakly identified");
+  }
+  result.pool = rows_to_physical(parameters, result.pool);
+  result.pool_weights = posterior.weights;
   result.samples = rows_to_physical(parameters, posterior.samples);
   result.mean = result.pool.transpose() * posterior.weights;
   const Eigen::MatrixXd centred = result.pool.rowwise() - result.mean.transpose();
@@ -549,8 +654,10 @@ CalibrationResult Calibration::run() const {
   result.poorly_resolved = posterior.poorly_resolved;
   result.warning = posterior.warning;
   if (!posterior.warning.empty()) result.warnings.push_back("posterior: " + posterior.warning);
-  result.elapsed = std::chrono::duration<double>(Clock::now() - start).count();
-  return result;
+}
+
+const char* calibration_method_name(CalibrationMethod method) {
+  return method == CalibrationMethod::sbalc ? "sbalc" : "emulator";
 }
 
 }  // namespace rsw::calibration

@@ -48,6 +48,7 @@
 // and every feature of the calibration (it may have more).
 #pragma once
 
+#include "calibration/emulator_calibration.hpp"
 #include "calibration/farm.hpp"
 #include "calibration/forward_model.hpp"
 #include "calibration/likelihood.hpp"
@@ -57,7 +58,9 @@
 #include <Eigen/Core>
 
 #include <filesystem>
+#include <functional>
 #include <iosfwd>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -98,8 +101,17 @@ struct InitialRuns {
 // file that is not a study results file.
 InitialRuns read_initial_runs(const std::filesystem::path& results_file, const StudyDesign& design);
 
+// Which algorithm learns the posterior (docs/CALIBRATION.md, "Two routes"): SBALC, a
+// GP of the log-likelihood (the paper's method, sbalc.hpp), or the emulator route, GPs
+// of the features with tempered SMC on the posterior they imply (emulator_calibration.hpp).
+enum class CalibrationMethod { sbalc, emulator };
+
+const char* calibration_method_name(CalibrationMethod method);
+
 struct CalibrationOptions {
+  CalibrationMethod method = CalibrationMethod::sbalc;
   SbalcOptions sbalc;
+  EmulatorCalibrationOptions emulator;
   PosteriorOptions posterior;
   // The evaluation cache, one study results file per farm call (see above).
   std::filesystem::path evaluations_folder;
@@ -112,7 +124,7 @@ struct CalibrationOptions {
   InitialRuns initial_runs;
 };
 
-// One forward-model run asked for by SBALC, in the order asked.
+// One forward-model run asked for by the method, in the order asked.
 struct CalibrationEvaluation {
   std::size_t batch = 0;          // SBALC's evaluator call (0: the initial design)
   Eigen::VectorXd theta_unit;     // u ∈ [0,1]^d
@@ -132,7 +144,12 @@ struct CalibrationResult {
   std::vector<std::string> parameter_units;
   std::vector<std::string> feature_names;
 
-  // Evidence and convergence (SBALC, last iteration).
+  CalibrationMethod method = CalibrationMethod::sbalc;
+
+  // Evidence and convergence (the last iteration). The emulator route has no GP of the
+  // log-likelihood: its bounds are ln(Z̃ (1 ∓ e)), e = SE(Z̃)/Z̃ (the pool's Monte Carlo
+  // error, also pool_relative_error), ratio = 2e, noise_ratio = 0, and the numerical
+  // noise is per feature (feature_noise_standard_deviations).
   bool converged = false;
   std::string stop_reason;
   double log_evidence = 0.0;        // ln ĉ
@@ -144,7 +161,9 @@ struct CalibrationResult {
   double pool_ess = 0.0;                  // ESS of SBALC's pool (its stopping guard, sbalc.hpp)
   double pool_ess_threshold = 0.0;
   double pool_relative_error = 0.0;       // Monte Carlo error SE(ĉ)/ĉ of the pool
-  std::vector<SbalcIteration> history;    // chosen points in u
+  std::vector<SbalcIteration> history;    // SBALC's iterations; chosen points in u
+  std::vector<EmulatorIteration> emulator_history;  // the emulator route's iterations
+  Eigen::VectorXd feature_noise_standard_deviations;  // emulator route: τ_j of the last emulators, SI
   GaussianProcessHyperparameters hyperparameters;  // of the last GP (length scales in u)
   TrendType trend_used = TrendType::Constant;
   Eigen::MatrixXd design_unit;      // successful points of the GP, u
@@ -174,6 +193,14 @@ struct CalibrationResult {
   double ess_threshold = 0.0;
   bool poorly_resolved = false;
   std::string warning;              // empty unless poorly_resolved
+  // What the data say of each parameter, in the unit cube where the prior is uniform
+  // (variance 1/12): the posterior contraction 1 − Var_post(u_i)/Var_prior(u_i)
+  // (Betancourt 2018, "Towards a principled Bayesian workflow") and its reading:
+  // "identified" when the posterior sd is at most half the prior's (contraction ≥ 0.75),
+  // "not identified" when it is above 0.8 of it (contraction < 0.36): the posterior is
+  // close to the prior; "weakly identified" in between.
+  Eigen::VectorXd contraction;
+  std::vector<std::string> identification;
 
   // Every warning of the result: SBALC's (sbalc.hpp: failed runs left out of the GP, the
   // stopping guards that failed, why it did not converge), then the posterior's `warning`.
@@ -200,6 +227,18 @@ class Calibration {
   CalibrationResult run() const;
 
  private:
+  using RunBatch = std::function<std::vector<CalibrationEvaluation>(const std::vector<Eigen::VectorXd>&)>;
+  int n_initial() const;
+  int max_evaluations() const;
+  // Each fills the method's part of the result and the unit-cube pool (result.pool,
+  // result.pool_log_likelihood) and returns the SIR posterior of that pool.
+  PosteriorResult run_sbalc(const RunBatch& evaluate_runs, const std::optional<Eigen::MatrixXd>& initial_design,
+                            CalibrationResult& result) const;
+  PosteriorResult run_emulator(const RunBatch& evaluate_runs, const std::optional<Eigen::MatrixXd>& initial_design,
+                               CalibrationResult& result) const;
+  // Physical pool and samples, moments, MAP, intervals, contraction, posterior warning.
+  void summarise_posterior(const PosteriorResult& posterior, CalibrationResult& result) const;
+
   const ForwardModel& model_;
   StudyDesign design_;
   GaussianLikelihood likelihood_;

@@ -168,6 +168,10 @@ void declare_calibration_keys(fem::ConfigSchema& s) {
   // The defaults are simulator_sbalc_options() (sbalc.hpp, "Defaults"): the library's
   // SbalcOptions{} with the adaptive pool, the estimated nugget and batches of 4.
   const SbalcOptions defaults = simulator_sbalc_options();
+  s.choice("calibration.method", {"sbalc", "emulator"}).default_value("sbalc")
+      .doc("sbalc: a GP of the log-likelihood, the paper's method, for one to three parameters; emulator: a GP per "
+           "feature and Monte Carlo sampling of the posterior they imply, for more parameters or narrow posteriors "
+           "(docs/CALIBRATION.md, 'Two routes').");
   s.section("calibration.sbalc",
             "Streamlined Bayesian active learning cubature of the evidence (Li et al. 2025) with a nugget. The "
             "defaults are the paper's SBALC except pool: adaptive, nugget: estimated and batch_size: 4, chosen for "
@@ -229,7 +233,41 @@ void declare_calibration_keys(fem::ConfigSchema& s) {
       .doc("GP mean function; a quadratic suits a log-likelihood and is used once there are enough points.");
 
   s.string(initial_runs_key).default_value("")
-      .doc("Results (.h5) or study file of a study of this model: its runs start SBALC (docs/CALIBRATION.md).");
+      .doc("Results (.h5) or study file of a study of this model: its runs start the calibration's initial design "
+           "(docs/CALIBRATION.md).");
+
+  const EmulatorCalibrationOptions emulator;
+  s.section("calibration.emulator",
+            "The emulator route (method: emulator): a GP per feature, the likelihood they imply with their "
+            "variance added, tempered SMC and importance sampling of its posterior, new runs where the posterior "
+            "lives and the emulators are least sure (docs/CALIBRATION.md, 'Two routes').");
+  s.integer("calibration.emulator.initial_points").default_value("0").range(Range::closed(0, 100000))
+      .doc("Runs of the initial maximin Latin hypercube; 0: ten per parameter.");
+  s.integer("calibration.emulator.batch_size").default_value(std::to_string(emulator.batch_size))
+      .range(Range::closed(1, 10000))
+      .doc("Runs chosen per iteration (kriging believer) and run in parallel.");
+  s.integer("calibration.emulator.max_evaluations").default_value(std::to_string(emulator.max_evaluations))
+      .range(Range::closed(3, 1000000))
+      .doc("Cap on forward-model runs, initial design and failed runs included; reaching it means not converged.");
+  s.number("calibration.emulator.variance_tolerance", "1", "1").default_value(shortest(emulator.variance_tolerance))
+      .range(Range::open_closed(0, 100))
+      .doc("Converged needs, for every feature, the emulator's variance averaged over the posterior at most this "
+           "share of the variance no run removes (the observed mean's, plus the model's numerical noise).");
+  s.number("calibration.emulator.quantile_tolerance", "1", "1").default_value(shortest(emulator.quantile_tolerance))
+      .range(Range::open_closed(0, 100))
+      .doc("... and the 5 %, 50 % and 95 % posterior quantiles of every parameter moved by at most this many "
+           "posterior standard deviations since the previous iteration; both on two iterations in a row.");
+  s.integer("calibration.emulator.pool_size").default_value(std::to_string(emulator.pool_size))
+      .range(Range::closed(1000, 10000000))
+      .doc("Importance samples of the posterior (its evidence, moments and intervals).");
+  s.integer("calibration.emulator.particles").default_value(std::to_string(emulator.smc.n_particles))
+      .range(Range::closed(100, 1000000))
+      .doc("Particles of the tempered sequential Monte Carlo sampler.");
+  s.integer("calibration.emulator.seed").default_value(std::to_string(emulator.seed)).range(Range::closed(0, 1e9))
+      .doc("Seed of the design, the GP restarts and the samplers; the same seed replays the same runs.");
+  s.choice("calibration.emulator.trend", {"constant", "diagonal_quadratic", "full_quadratic"})
+      .default_value("diagonal_quadratic")
+      .doc("Mean function of each feature's GP (Matern 5/2 kernel, estimated nugget).");
 
   s.section("calibration.posterior", "Sampling-importance-resampling of the prior pool (Smith & Gelfand 1992).");
   s.integer("calibration.posterior.n_samples").default_value("4000").range(Range::closed(10, 10000000))
@@ -239,6 +277,16 @@ void declare_calibration_keys(fem::ConfigSchema& s) {
       .doc("Probability of the equal-tailed credible intervals.");
   s.integer("calibration.posterior.n_predictive").default_value("4").range(Range::closed(0, 1000))
       .doc("Posterior samples run through the forward model for predictive signals, besides the posterior mean.");
+}
+
+int initial_points(const CalibrationSettings& settings, std::size_t n_parameters) {
+  if (settings.method == CalibrationMethod::sbalc) return settings.sbalc.n_initial;
+  return settings.emulator.n_initial > 0 ? settings.emulator.n_initial : 10 * static_cast<int>(n_parameters);
+}
+
+int max_evaluations(const CalibrationSettings& settings) {
+  return settings.method == CalibrationMethod::sbalc ? settings.sbalc.max_evaluations
+                                                     : settings.emulator.max_evaluations;
 }
 
 CalibrationSettings read_calibration_settings(const Study& study) {
@@ -331,10 +379,35 @@ CalibrationSettings read_calibration_settings(const Study& study) {
                    : trend == "diagonal_quadratic" ? TrendType::DiagonalQuadratic
                                                    : TrendType::FullQuadratic;
 
+  // The emulator route.
+  settings.method = c.text("calibration.method") == "emulator" ? CalibrationMethod::emulator : CalibrationMethod::sbalc;
+  EmulatorCalibrationOptions& emulator = settings.emulator;
+  emulator.n_initial = c.integer("calibration.emulator.initial_points");
+  emulator.batch_size = c.integer("calibration.emulator.batch_size");
+  emulator.max_evaluations = c.integer("calibration.emulator.max_evaluations");
+  emulator.variance_tolerance = c.number("calibration.emulator.variance_tolerance");
+  emulator.quantile_tolerance = c.number("calibration.emulator.quantile_tolerance");
+  emulator.pool_size = c.integer("calibration.emulator.pool_size");
+  emulator.smc.n_particles = c.integer("calibration.emulator.particles");
+  emulator.seed = static_cast<std::uint64_t>(c.integer("calibration.emulator.seed"));
+  const std::string emulator_trend = c.text("calibration.emulator.trend");
+  emulator.gp.trend = emulator_trend == "constant"             ? TrendType::Constant
+                      : emulator_trend == "diagonal_quadratic" ? TrendType::DiagonalQuadratic
+                                                               : TrendType::FullQuadratic;
+  if (settings.method == CalibrationMethod::emulator) {
+    const int n_initial = initial_points(settings, study.parameter_space().n_parameters());
+    if (n_initial >= emulator.max_evaluations) {
+      c.fail("calibration.emulator.max_evaluations",
+             "the initial design holds " + std::to_string(n_initial) +
+                 " runs (calibration.emulator.initial_points; 0 means ten per parameter); allowed: more than " +
+                 std::to_string(n_initial));
+    }
+  }
+
   // Posterior.
   settings.posterior.n_samples = c.integer("calibration.posterior.n_samples");
   settings.posterior.credible_level = c.number("calibration.posterior.credible_level");
-  settings.posterior.seed = sbalc.seed;
+  settings.posterior.seed = settings.method == CalibrationMethod::sbalc ? sbalc.seed : emulator.seed;
   settings.n_predictive_samples = c.integer("calibration.posterior.n_predictive");
 
   // Runs of an earlier study.
@@ -378,10 +451,12 @@ InitialRuns load_initial_runs(const Study& study, const CalibrationSettings& set
   } catch (const CalibrationError& e) {
     study.config().fail(initial_runs_key, e.what());
   }
-  const std::size_t n_design =
-      std::max(initial.runs.size(), static_cast<std::size_t>(std::max(settings.sbalc.n_initial, 0)));
-  if (n_design >= static_cast<std::size_t>(settings.sbalc.max_evaluations)) {
-    fail_key(study, "calibration.sbalc.max_evaluations",
+  const std::size_t n_design = std::max(
+      initial.runs.size(), static_cast<std::size_t>(initial_points(settings, study.parameter_space().n_parameters())));
+  if (n_design >= static_cast<std::size_t>(max_evaluations(settings))) {
+    fail_key(study,
+             settings.method == CalibrationMethod::sbalc ? "calibration.sbalc.max_evaluations"
+                                                         : "calibration.emulator.max_evaluations",
              "the initial design holds " + std::to_string(n_design) + " runs of " + settings.initial_runs.string() +
                  " (calibration.initial_runs), and the cap counts them; allowed: more than " +
                  std::to_string(n_design));

@@ -18,6 +18,9 @@
 //       discrepancy: [{feature: R_gamma, standard_deviation: 3 uohm}]
 //                                          δ_j, a fixed model-discrepancy spread
 //                                          (Kennedy & O'Hagan 2001), 0 where not given
+//     method: sbalc | emulator               which route learns the posterior (calibrate.hpp)
+//     emulator: {initial_points, batch_size, max_evaluations, variance_tolerance,
+//                quantile_tolerance, pool_size, particles, seed, trend}   (emulator_calibration.hpp)
 //     sbalc: {pool_size, initial_points, batch_size, max_evaluations, tolerance,
 //             nugget: off | fixed | estimated, nugget_standard_deviation, seed,
 //             kernel: matern52 | squared_exponential, trend}       (sbalc.hpp; Li et al. 2025)
@@ -69,11 +72,18 @@ struct CalibrationSettings {
   std::vector<std::filesystem::path> signal_files;  // absolute, signal_files source
   ObservationNoise noise;                           // σ_j, SI feature units
   std::map<std::string, double> discrepancy_variances;  // δ_j², SI feature units²
+  CalibrationMethod method = CalibrationMethod::sbalc;
   SbalcOptions sbalc;
+  EmulatorCalibrationOptions emulator;
   PosteriorOptions posterior;  // n_samples, seed, credible_level
   int n_predictive_samples = 4;  // posterior samples run for predictive signals (besides the mean)
   std::filesystem::path initial_runs;  // a study results file, absolute; empty: none
 };
+
+// The method's initial design size (the emulator's 0 resolved to ten per parameter) and
+// evaluation cap.
+int initial_points(const CalibrationSettings& settings, std::size_t n_parameters);
+int max_evaluations(const CalibrationSettings& settings);
 
 // Reads and checks the calibration section of a loaded study (observation files are
 // not opened here); throws fem::ConfigError.

@@ -284,6 +284,28 @@ void write_posterior_csv(const fs::path& path, const cal::CalibrationResult& res
   write_text(path, csv.str());
 }
 
+// Columns of the emulator route's diagnostics table, then one variance ratio per feature.
+const std::vector<std::string> emulator_diagnostics_columns = {
+    "iteration", "n_points", "n_evaluations", "log_evidence", "evidence_relative_error", "smc_log_evidence",
+    "n_temperatures", "pool_ess", "max_variance_ratio", "quantile_shift", "variance_settled", "quantiles_settled",
+    "counted", "n_chosen", "seconds"};
+
+Eigen::MatrixXd emulator_diagnostics_table(const cal::CalibrationResult& result) {
+  const auto p = static_cast<Eigen::Index>(result.feature_names.size());
+  const auto n_fixed = static_cast<Eigen::Index>(emulator_diagnostics_columns.size());
+  Eigen::MatrixXd table(static_cast<Eigen::Index>(result.emulator_history.size()), n_fixed + p);
+  for (std::size_t k = 0; k < result.emulator_history.size(); ++k) {
+    const cal::EmulatorIteration& it = result.emulator_history[k];
+    const auto r = static_cast<Eigen::Index>(k);
+    table.row(r).head(n_fixed) << static_cast<double>(k), it.n_points, it.n_evaluations, it.log_evidence,
+        it.evidence_relative_error, it.smc_log_evidence, it.n_temperatures, it.pool_ess, it.max_variance_ratio,
+        it.quantile_shift, it.variance_settled ? 1.0 : 0.0, it.quantiles_settled ? 1.0 : 0.0, it.counted ? 1.0 : 0.0,
+        static_cast<double>(it.chosen_points.rows()), it.seconds;
+    table.row(r).tail(p) = it.variance_ratios.transpose();
+  }
+  return table;
+}
+
 // Columns of the diagnostics table (CSV and /diagnostics/table), then one length scale
 // per parameter (u units).
 const std::vector<std::string> diagnostics_columns = {
@@ -293,6 +315,7 @@ const std::vector<std::string> diagnostics_columns = {
     "counted"};
 
 Eigen::MatrixXd diagnostics_table(const cal::CalibrationResult& result) {
+  if (result.method == cal::CalibrationMethod::emulator) return emulator_diagnostics_table(result);
   const auto d = static_cast<Eigen::Index>(result.parameter_names.size());
   const auto n_columns = static_cast<Eigen::Index>(diagnostics_columns.size()) + d;
   Eigen::MatrixXd table(static_cast<Eigen::Index>(result.history.size()), n_columns);
@@ -315,6 +338,11 @@ Eigen::MatrixXd diagnostics_table(const cal::CalibrationResult& result) {
 }
 
 std::vector<std::string> diagnostics_header(const cal::CalibrationResult& result) {
+  if (result.method == cal::CalibrationMethod::emulator) {
+    std::vector<std::string> header = emulator_diagnostics_columns;
+    for (const auto& name : result.feature_names) header.push_back("variance_ratio:" + name);
+    return header;
+  }
   std::vector<std::string> header = diagnostics_columns;
   for (const auto& name : result.parameter_names) header.push_back("length_scale:" + name);
   return header;
@@ -353,9 +381,35 @@ Json parameters_json(const cal::Study& study, const cal::CalibrationResult& resu
                           {"standard_deviation", result.standard_deviation[ii]},
                           {"map", result.map_point[ii]},
                           {"credible_lower", result.credible_lower[ii]},
-                          {"credible_upper", result.credible_upper[ii]}});
+                          {"credible_upper", result.credible_upper[ii]},
+                          {"contraction", result.contraction[ii]},
+                          {"identification", result.identification[i]}});
   }
   return parameters;
+}
+
+std::size_t n_iterations(const cal::CalibrationResult& result) {
+  return result.method == cal::CalibrationMethod::emulator ? result.emulator_history.size() : result.history.size();
+}
+
+// The emulator route's settings and last iteration (null for SBALC).
+Json emulator_json(const cal::CalibrationResult& result, const cal::CalibrationSettings& settings) {
+  if (result.method != cal::CalibrationMethod::emulator || result.emulator_history.empty()) return nullptr;
+  const cal::EmulatorIteration& last = result.emulator_history.back();
+  Json features = Json::array();
+  for (std::size_t j = 0; j < result.feature_names.size(); ++j) {
+    const auto jj = static_cast<Eigen::Index>(j);
+    features.push_back({{"name", result.feature_names[j]},
+                        {"variance_ratio", last.variance_ratios[jj]},
+                        {"noise_standard_deviation", last.noise_standard_deviations[jj]}});
+  }
+  return {{"variance_tolerance", settings.emulator.variance_tolerance},
+          {"quantile_tolerance", settings.emulator.quantile_tolerance},
+          {"trend", trend_name(settings.emulator.gp.trend)},
+          {"max_variance_ratio", last.max_variance_ratio},
+          {"quantile_shift", finite_or_null(last.quantile_shift)},
+          {"smc_log_evidence", last.smc_log_evidence},
+          {"features", features}};
 }
 
 Json noise_json(const cal::GaussianLikelihood& likelihood, const cal::CalibrationSettings& settings,
@@ -430,8 +484,12 @@ void write_h5(const fs::path& path, const cal::Study& study, const cal::Calibrat
   h5.write_string("/diagnostics/refusals", refusals.dump(1));
   const auto d = static_cast<Eigen::Index>(result.parameter_names.size());
   std::vector<Eigen::VectorXd> chosen_rows;
-  for (std::size_t k = 0; k < result.history.size(); ++k) {
-    const Eigen::MatrixXd& chosen = result.history[k].chosen_points;
+  const std::size_t n_iterations =
+      result.method == cal::CalibrationMethod::emulator ? result.emulator_history.size() : result.history.size();
+  for (std::size_t k = 0; k < n_iterations; ++k) {
+    const Eigen::MatrixXd& chosen = result.method == cal::CalibrationMethod::emulator
+                                        ? result.emulator_history[k].chosen_points
+                                        : result.history[k].chosen_points;
     for (Eigen::Index r = 0; r < chosen.rows(); ++r) {
       Eigen::VectorXd row(d + 1);
       row << static_cast<double>(k), cal::unit_to_physical(study.parameter_space(), chosen.row(r).transpose());
@@ -443,6 +501,15 @@ void write_h5(const fs::path& path, const cal::Study& study, const cal::Calibrat
   h5.write("/diagnostics/chosen_points", to_row_major(chosen));
   h5.set_attribute("/diagnostics/chosen_points", "columns", "iteration, then theta in parameter units");
 
+  h5.set_attribute("/", "method", cal::calibration_method_name(result.method));
+  if (result.method == cal::CalibrationMethod::emulator) {
+    // The runs the feature emulators learnt from (u in [0,1]^d), ln L of each, and each
+    // feature's numerical noise tau_j (SI feature units).
+    h5.write("/emulator/design_unit", to_row_major(result.design_unit));
+    h5.write("/emulator/log_likelihoods", to_std(result.design_log_likelihoods));
+    h5.write("/emulator/feature_noise_standard_deviation", to_std(result.feature_noise_standard_deviations));
+    h5.set_attribute("/emulator", "trend", trend_name(settings.emulator.gp.trend));
+  } else {
   // GP of the log-likelihood (inputs u in [0,1]^d).
   h5.write("/gp/length_scales", to_std(result.hyperparameters.length_scales));
   h5.write("/gp/signal_variance", std::vector<double>{result.hyperparameters.signal_variance});
@@ -453,6 +520,7 @@ void write_h5(const fs::path& path, const cal::Study& study, const cal::Calibrat
   h5.set_attribute("/gp", "trend_used", trend_name(result.trend_used));
   h5.set_attribute("/gp", "nugget", nugget_name(settings.sbalc.gp.nugget_mode));
   h5.set_attribute("/gp", "noise_standard_deviation", result.noise_standard_deviation);
+  }
 
   // Observations and noise estimate (SI feature units).
   h5.write("/observations/values", to_row_major(observations.values));
@@ -529,7 +597,9 @@ void run_calibrate(const CalibrateOptions& options, const ForwardModelFactory& f
   const fs::path output = study.output_folder();
   const fs::path calibration_folder = output / (study.name() + "_calibration");
   cal::CalibrationOptions calibration_options;
+  calibration_options.method = settings.method;
   calibration_options.sbalc = settings.sbalc;
+  calibration_options.emulator = settings.emulator;
   calibration_options.posterior = settings.posterior;
   calibration_options.evaluations_folder = calibration_folder / "evaluations";
   calibration_options.farm.n_workers = options.n_workers;
@@ -547,18 +617,26 @@ void run_calibrate(const CalibrateOptions& options, const ForwardModelFactory& f
               << (observations.values.cols() == 1 ? "" : "s") << " ("
               << (settings.observation_source == cal::ObservationSource::features_file ? "features file"
                                                                                        : "signal files")
-              << "), noise " << noise_kind_name(settings.noise.kind) << "; SBALC pool " << settings.sbalc.pool_size
-              << ", " << settings.sbalc.n_initial << " initial points, batches of " << settings.sbalc.batch_size
-              << ", at most " << settings.sbalc.max_evaluations << " runs, nugget "
-              << nugget_name(settings.sbalc.gp.nugget_mode) << "\n";
+              << "), noise " << noise_kind_name(settings.noise.kind) << "; ";
+    if (settings.method == cal::CalibrationMethod::sbalc) {
+      std::cerr << "SBALC pool " << settings.sbalc.pool_size << ", " << settings.sbalc.n_initial
+                << " initial points, batches of " << settings.sbalc.batch_size << ", at most "
+                << settings.sbalc.max_evaluations << " runs, nugget " << nugget_name(settings.sbalc.gp.nugget_mode)
+                << "\n";
+    } else {
+      std::cerr << "feature emulators, " << cal::initial_points(settings, study.parameter_space().n_parameters())
+                << " initial points, batches of " << settings.emulator.batch_size << ", at most "
+                << settings.emulator.max_evaluations << " runs\n";
+    }
   }
   const cal::InitialRuns& initial = calibration_options.initial_runs;
   if (!initial.runs.empty() && !options.quiet) {
     const auto n_ok = std::count_if(initial.runs.begin(), initial.runs.end(), [](const cal::InitialRun& r) { return r.ok; });
     std::cerr << "calibration " << study.name() << ": initial design from " << initial.file.string() << ": "
               << initial.runs.size() << " runs (" << n_ok << " ok, " << initial.runs.size() - n_ok << " failed)";
-    if (static_cast<int>(initial.runs.size()) < settings.sbalc.n_initial)
-      std::cerr << " and " << settings.sbalc.n_initial - static_cast<int>(initial.runs.size()) << " Hammersley points";
+    const int n_initial = cal::initial_points(settings, study.parameter_space().n_parameters());
+    if (static_cast<int>(initial.runs.size()) < n_initial)
+      std::cerr << " and " << n_initial - static_cast<int>(initial.runs.size()) << " Hammersley points";
     std::cerr << "\n";
     for (const auto& note : initial.notes) std::cerr << "  note: " << note << "\n";
   }
@@ -588,6 +666,7 @@ void run_calibrate(const CalibrateOptions& options, const ForwardModelFactory& f
   Json summary = {
       {"study", study.name()},
       {"study_file", fs::absolute(study.file()).lexically_normal().string()},
+      {"method", cal::calibration_method_name(result.method)},
       {"warnings", result.warnings},
       {"converged", result.converged},
       {"stop_reason", result.stop_reason},
@@ -597,8 +676,8 @@ void run_calibrate(const CalibrateOptions& options, const ForwardModelFactory& f
         {"log_evidence_upper", finite_or_null(result.log_evidence_upper)},
         {"ratio", finite_or_null(result.ratio)},
         {"noise_ratio", result.noise_ratio},
-        {"tolerance", settings.sbalc.tolerance},
-        {"tolerance_used", result.history.empty() ? settings.sbalc.tolerance : result.history.back().tolerance_used},
+        {"tolerance", result.method == cal::CalibrationMethod::sbalc ? Json(settings.sbalc.tolerance) : Json(nullptr)},
+        {"tolerance_used", result.history.empty() ? Json(nullptr) : Json(result.history.back().tolerance_used)},
         {"pool_relative_error", finite_or_null(result.pool_relative_error)},
         {"pool_effective_sample_size", result.pool_ess},
         {"pool_ess_threshold", result.pool_ess_threshold}}},
@@ -608,7 +687,7 @@ void run_calibrate(const CalibrateOptions& options, const ForwardModelFactory& f
       {"n_failed", result.n_failed},
       {"n_warned", std::count_if(result.evaluations.begin(), result.evaluations.end(),
                                  [](const cal::CalibrationEvaluation& e) { return !e.warnings.empty(); })},
-      {"n_iterations", result.history.size()},
+      {"n_iterations", n_iterations(result)},
       {"parameters", parameters_json(study, result)},
       {"credible_level", result.credible_level},
       {"effective_sample_size", result.effective_sample_size},
@@ -616,6 +695,7 @@ void run_calibrate(const CalibrateOptions& options, const ForwardModelFactory& f
       {"pool_size", result.pool.rows()},
       {"warning", result.warning},
       {"map_log_likelihood", result.map_log_likelihood},
+      {"emulator", emulator_json(result, settings)},
       {"gp",
        {{"kernel", kernel_name(settings.sbalc.gp.kernel)},
         {"trend_used", trend_name(result.trend_used)},
@@ -658,24 +738,33 @@ void run_calibrate(const CalibrateOptions& options, const ForwardModelFactory& f
       result.n_from_study > 0 ? std::to_string(result.n_from_study) + " from the study, " : std::string();
   std::printf("calibration %s: %s after %zu runs (%s%zu reused, %zu failed), %zu iterations, %s\n",
               study.name().c_str(), result.converged ? "converged" : "NOT converged", result.n_evaluations,
-              from_study.c_str(), result.n_reused, result.n_failed, result.history.size(),
+              from_study.c_str(), result.n_reused, result.n_failed, n_iterations(result),
               cal::format_duration(result.elapsed).c_str());
   std::printf("  %s\n", result.stop_reason.c_str());
   for (std::size_t r = 0; r < result.evaluations.size(); ++r)
     if (!result.evaluations[r].warnings.empty() && !result.evaluations[r].reused)
       std::printf("  run %zu warns: %s\n", r, result.evaluations[r].warnings.c_str());
-  std::printf("  evidence ln c = %.6g, bounds [%.6g, %.6g] (pool Monte Carlo error %.2g %%, pool ESS %.1f), ratio "
-              "%.3g (noise part %.3g); log-likelihood noise tau = %.3g\n",
-              result.log_evidence, result.log_evidence_lower, result.log_evidence_upper,
-              100.0 * result.pool_relative_error, result.pool_ess, result.ratio, result.noise_ratio,
-              result.noise_standard_deviation);
+  if (result.method == cal::CalibrationMethod::sbalc) {
+    std::printf("  evidence ln c = %.6g, bounds [%.6g, %.6g] (pool Monte Carlo error %.2g %%, pool ESS %.1f), ratio "
+                "%.3g (noise part %.3g); log-likelihood noise tau = %.3g\n",
+                result.log_evidence, result.log_evidence_lower, result.log_evidence_upper,
+                100.0 * result.pool_relative_error, result.pool_ess, result.ratio, result.noise_ratio,
+                result.noise_standard_deviation);
+  } else if (!result.emulator_history.empty()) {
+    const cal::EmulatorIteration& last = result.emulator_history.back();
+    std::printf("  evidence ln Z = %.6g (Monte Carlo error %.2g %%, pool ESS %.1f); emulator variance ratio %.3g "
+                "(tolerance %.3g), quantile shift %.3g sd (tolerance %.3g)\n",
+                result.log_evidence, 100.0 * result.pool_relative_error, result.pool_ess, last.max_variance_ratio,
+                settings.emulator.variance_tolerance, last.quantile_shift, settings.emulator.quantile_tolerance);
+  }
   const int percent = static_cast<int>(std::lround(100 * result.credible_level));
   for (std::size_t i = 0; i < result.parameter_names.size(); ++i) {
     const auto ii = static_cast<Eigen::Index>(i);
-    std::printf("  %-24s mean %-12.6g sd %-12.6g MAP %-12.6g %d %% interval [%.6g, %.6g] %s\n",
+    std::printf("  %-24s mean %-12.6g sd %-12.6g MAP %-12.6g %d %% interval [%.6g, %.6g] %s (%s, contraction %.2f)\n",
                 result.parameter_names[i].c_str(), result.mean[ii], result.standard_deviation[ii],
                 result.map_point[ii], percent, result.credible_lower[ii], result.credible_upper[ii],
-                result.parameter_units[i] == "1" ? "" : result.parameter_units[i].c_str());
+                result.parameter_units[i] == "1" ? "" : result.parameter_units[i].c_str(),
+                result.identification[i].c_str(), result.contraction[ii]);
   }
   std::printf("  effective sample size %.1f of a pool of %lld\n", result.effective_sample_size,
               static_cast<long long>(result.pool.rows()));
@@ -697,7 +786,7 @@ void add_calibrate_command(CLI::App& app, ForwardModelFactory model_factory) {
   auto options = std::make_shared<CalibrateOptions>();
   auto factory = std::make_shared<ForwardModelFactory>(std::move(model_factory));
   CLI::App* calibrate = app.add_subcommand(
-      "calibrate", "Bayesian calibration of a study's parameters against its observations (SBALC, SIR posterior)");
+      "calibrate", "Bayesian calibration of a study's parameters against its observations (SBALC or feature emulators)");
   calibrate->add_option("study", options->study_file, "Study file (YAML) with a calibration section")->required();
   calibrate->add_option("--set", options->overrides, "Override a study key: --set key=value (repeatable)")
       ->take_all()

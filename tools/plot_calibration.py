@@ -13,7 +13,7 @@ other one is found next to it). Writes into DIR (default: the folder of RESULT):
                           smallest regions holding 50 % and 90 % of the draws below it.
                           Parameters with a log10-uniform prior are drawn as log10 θ.
                           --truth name=value marks known values (twin experiments) in red.
-  <name>_convergence.png  SBALC history (paper §2.5, Li et al. 2025) against the number
+  <name>_convergence.png  the emulator route's evidence and stopping checks, or the SBALC history (paper §2.5, Li et al. 2025) against the number
                           of forward-model runs: ln ĉ with the band [ln c_lower,
                           ln c_upper], and the ratio (c_upper − c_lower)/ĉ with the
                           tolerance used (including the noise allowance of the nugget);
@@ -176,7 +176,47 @@ def plot_corner(name, summary, samples, truths, out_dir, dpi):
     return path
 
 
+def plot_emulator_convergence(name, summary, table, columns, out_dir, dpi):
+    """The emulator route: ln Z with its Monte Carlo band, and the two stopping checks."""
+    column = {c: k for k, c in enumerate(columns)}
+    n = table[:, column["n_evaluations"]]
+    log_z = table[:, column["log_evidence"]]
+    error = table[:, column["evidence_relative_error"]]
+    emulator = summary.get("emulator") or {}
+    fig, (ax_z, ax_r) = plt.subplots(2, 1, figsize=(7, 6.5), sharex=True)
+    ax_z.fill_between(n, log_z + np.log1p(-np.minimum(error, 0.999)), log_z + np.log1p(error), color="C0", alpha=0.25,
+                      label="Monte Carlo error")
+    ax_z.plot(n, log_z, "o-", color="C0", markersize=3, label="ln Z (importance sampling)")
+    ax_z.plot(n, table[:, column["smc_log_evidence"]], "x", color="0.4", markersize=4, label="ln Z (tempered SMC)")
+    ax_z.set_ylabel("ln evidence")
+    ax_z.grid(True, alpha=0.3)
+    ax_z.legend(fontsize=8)
+    ratio = table[:, column["max_variance_ratio"]]
+    shift = table[:, column["quantile_shift"]]
+    ax_r.semilogy(n, np.where(ratio > 0, ratio, np.nan), "o-", color="C1", markersize=3,
+                  label="emulator variance ratio (largest feature)")
+    ax_r.semilogy(n, np.where(shift > 0, shift, np.nan), "s-", color="C2", markersize=3,
+                  label="quantile shift [posterior sd]")
+    if "variance_tolerance" in emulator:
+        ax_r.axhline(emulator["variance_tolerance"], color="C1", linestyle="--", linewidth=0.8)
+    if "quantile_tolerance" in emulator:
+        ax_r.axhline(emulator["quantile_tolerance"], color="C2", linestyle="--", linewidth=0.8)
+    ax_r.set_xlabel("forward-model runs")
+    ax_r.set_ylabel("check (tolerance dashed)")
+    ax_r.grid(True, alpha=0.3, which="both")
+    ax_r.legend(fontsize=8)
+    state = "converged" if summary.get("converged") else "not converged"
+    fig.suptitle("%s: emulator route (%s, %d runs)" % (name, state, summary.get("n_evaluations", len(n))), fontsize=10)
+    fig.tight_layout()
+    path = os.path.join(out_dir, "%s_convergence.png" % name)
+    fig.savefig(path, dpi=dpi)
+    plt.close(fig)
+    return path
+
+
 def plot_convergence(name, summary, table, columns, out_dir, dpi):
+    if summary.get("method") == "emulator":
+        return plot_emulator_convergence(name, summary, table, columns, out_dir, dpi)
     column = {c: k for k, c in enumerate(columns)}
     n = table[:, column["n_evaluations"]]
     log_c = table[:, column["log_evidence"]]
