@@ -560,6 +560,19 @@ PosteriorResult Calibration::run_emulator(const RunBatch& evaluate_runs,
   const std::size_t d = design_.parameters.n_parameters();
   EmulatorCalibrationOptions emulator_options = options_.emulator;
   if (initial_design) emulator_options.initial_design = *initial_design;
+  if (options_.progress != nullptr) {
+    std::ostream& out = *options_.progress;
+    emulator_options.on_iteration = [&out, this](const EmulatorIteration& it) {
+      const std::streamsize precision = out.precision(3);
+      out << "calibration " << design_.name << ": emulators of " << it.n_points << " runs: ln Z " << it.log_evidence
+          << ", influence " << it.emulator_influence << " sd" << (it.influence_settled ? " (settled)" : "")
+          << ", variance ratio " << it.max_variance_ratio
+          << ", quantile shift " << it.quantile_shift << " sd" << (it.quantiles_settled ? " (settled)" : "")
+          << ", pool ESS " << static_cast<long>(it.pool_ess) << " (" << it.seconds << " s)\n"
+          << std::flush;
+      out.precision(precision);
+    };
+  }
   const BatchFeatureFunction evaluate_batch = [&](const std::vector<Eigen::VectorXd>& thetas_unit) {
     std::vector<std::optional<Eigen::VectorXd>> values;
     for (const CalibrationEvaluation& run : evaluate_runs(thetas_unit)) {

@@ -169,9 +169,7 @@ void declare_calibration_keys(fem::ConfigSchema& s) {
   // SbalcOptions{} with the adaptive pool, the estimated nugget and batches of 4.
   const SbalcOptions defaults = simulator_sbalc_options();
   s.choice("calibration.method", {"sbalc", "emulator"}).default_value("sbalc")
-      .doc("sbalc: a GP of the log-likelihood, the paper's method, for one to three parameters; emulator: a GP per "
-           "feature and Monte Carlo sampling of the posterior they imply, for more parameters or narrow posteriors "
-           "(docs/CALIBRATION.md, 'Two routes').");
+      .doc("sbalc (the paper's, for up to three parameters) or emulator (docs/CALIBRATION.md, 'Two routes').");
   s.section("calibration.sbalc",
             "Streamlined Bayesian active learning cubature of the evidence (Li et al. 2025) with a nugget. The "
             "defaults are the paper's SBALC except pool: adaptive, nugget: estimated and batch_size: 4, chosen for "
@@ -191,11 +189,8 @@ void declare_calibration_keys(fem::ConfigSchema& s) {
       .doc("Cap on forward-model runs, initial design and failed runs included; reaching it means not converged.");
   s.number("calibration.sbalc.tolerance", "1", "1").default_value(shortest(defaults.tolerance))
       .range(Range::open_closed(0, 100))
-      .doc("Stop when (c_upper - c_lower)/c, the pool's Monte Carlo error included, is below the tolerance on two "
-           "consecutive iterations after the initial design (paper: 0.1), provided the pool's effective sample "
-           "size is at least max(100, 1 % of the pool) and the log-likelihood noise tau does not exceed the "
-           "spread of the evaluated log-likelihoods near their maximum; the noise allowance raises the tolerance "
-           "at most threefold. A calibration that stops otherwise is not converged and says why.");
+      .doc("Stop when (c_upper - c_lower)/c is below it twice in a row, with the checks of docs/CALIBRATION.md "
+           "(paper: 0.1).");
   s.choice("calibration.sbalc.nugget", {"off", "fixed", "estimated"})
       .default_value(defaults.gp.nugget_mode == NuggetMode::Off     ? "off"
                      : defaults.gp.nugget_mode == NuggetMode::Fixed ? "fixed"
@@ -210,19 +205,13 @@ void declare_calibration_keys(fem::ConfigSchema& s) {
       .doc("Seed of the prior pool and the GP restarts; the same seed replays the same sequence of runs.");
   s.choice("calibration.sbalc.failed_runs", {"impute_minimum", "exclude"})
       .default_value(defaults.failed_runs == FailedRunPolicy::exclude ? "exclude" : "impute_minimum")
-      .doc("What the GP does with a failed run: impute_minimum enters it at the lowest log-likelihood of the "
-           "successful runs so far (a region where the simulator fails, e.g. a melting electrode, is learnt as a "
-           "region of poor fit and stops being proposed); exclude leaves it out (the evidence then rests on the "
-           "successful runs only).");
+      .doc("impute_minimum: a failed run enters the GP at the lowest log-likelihood so far; exclude: left out.");
   s.number("calibration.sbalc.log_likelihood_range", "1", "1").default_value(shortest(defaults.log_likelihood_range))
       .range(Range::closed(0, 1e6))
-      .doc("The GP of the log-likelihood sees max(lnL, lnL_max - range): only the top of the log-likelihood "
-           "matters for the evidence, and a GP asked to fit thousands of units of range chases the cliffs. 0: "
-           "no floor (the paper's).");
+      .doc("The GP sees max(lnL, lnL_max - range); 0: no floor (the paper's).");
   s.choice("calibration.sbalc.pool", {"adaptive", "prior"}).default_value(defaults.adaptive_pool ? "adaptive" : "prior")
-      .doc("prior: the paper's pool of prior samples throughout; adaptive: redrawn from a defensive mixture "
-           "around the current posterior (importance-weighted) whenever its effective sample size falls below 2 % "
-           "of the pool, so that a posterior much narrower than the prior is resolved.");
+      .doc("prior: the paper's pool; adaptive: redrawn around the current posterior when its effective sample "
+           "size falls below 2 % of the pool.");
   s.choice("calibration.sbalc.kernel", {"matern52", "squared_exponential"})
       .default_value(defaults.gp.kernel == KernelType::SquaredExponential ? "squared_exponential" : "matern52")
       .doc("Anisotropic GP kernel.");
@@ -233,41 +222,38 @@ void declare_calibration_keys(fem::ConfigSchema& s) {
       .doc("GP mean function; a quadratic suits a log-likelihood and is used once there are enough points.");
 
   s.string(initial_runs_key).default_value("")
-      .doc("Results (.h5) or study file of a study of this model: its runs start the calibration's initial design "
-           "(docs/CALIBRATION.md).");
+      .doc("Results (.h5) or study file of a study of this model: its runs start the initial design.");
 
   const EmulatorCalibrationOptions emulator;
   s.section("calibration.emulator",
-            "The emulator route (method: emulator): a GP per feature, the likelihood they imply with their "
-            "variance added, tempered SMC and importance sampling of its posterior, new runs where the posterior "
-            "lives and the emulators are least sure (docs/CALIBRATION.md, 'Two routes').");
+            "method: emulator, a GP per feature and Monte Carlo sampling of the posterior they imply "
+            "(docs/CALIBRATION.md, 'Two routes').");
   s.integer("calibration.emulator.initial_points").default_value("0").range(Range::closed(0, 100000))
       .doc("Runs of the initial maximin Latin hypercube; 0: ten per parameter.");
   s.integer("calibration.emulator.batch_size").default_value(std::to_string(emulator.batch_size))
       .range(Range::closed(1, 10000))
-      .doc("Runs chosen per iteration (kriging believer) and run in parallel.");
+      .doc("Runs chosen per iteration, run in parallel.");
   s.integer("calibration.emulator.max_evaluations").default_value(std::to_string(emulator.max_evaluations))
       .range(Range::closed(3, 1000000))
-      .doc("Cap on forward-model runs, initial design and failed runs included; reaching it means not converged.");
-  s.number("calibration.emulator.variance_tolerance", "1", "1").default_value(shortest(emulator.variance_tolerance))
+      .doc("Cap on runs, initial design and failures included.");
+  s.number("calibration.emulator.influence_tolerance", "1", "1").default_value(shortest(emulator.influence_tolerance))
       .range(Range::open_closed(0, 100))
-      .doc("Converged needs, for every feature, the emulator's variance averaged over the posterior at most this "
-           "share of the variance no run removes (the observed mean's, plus the model's numerical noise).");
+      .doc("Stop when the posterior without the emulators' variance differs by at most this many posterior sd "
+           "(5/50/95 % quantiles) ...");
   s.number("calibration.emulator.quantile_tolerance", "1", "1").default_value(shortest(emulator.quantile_tolerance))
       .range(Range::open_closed(0, 100))
-      .doc("... and the 5 %, 50 % and 95 % posterior quantiles of every parameter moved by at most this many "
-           "posterior standard deviations since the previous iteration; both on two iterations in a row.");
+      .doc("... and no 5/50/95 % quantile moved by more posterior sd than this, twice in a row.");
   s.integer("calibration.emulator.pool_size").default_value(std::to_string(emulator.pool_size))
       .range(Range::closed(1000, 10000000))
-      .doc("Importance samples of the posterior (its evidence, moments and intervals).");
+      .doc("Importance samples of the posterior.");
   s.integer("calibration.emulator.particles").default_value(std::to_string(emulator.smc.n_particles))
       .range(Range::closed(100, 1000000))
-      .doc("Particles of the tempered sequential Monte Carlo sampler.");
+      .doc("Particles of the tempered SMC sampler.");
   s.integer("calibration.emulator.seed").default_value(std::to_string(emulator.seed)).range(Range::closed(0, 1e9))
-      .doc("Seed of the design, the GP restarts and the samplers; the same seed replays the same runs.");
+      .doc("Seed of the design, GP restarts and samplers.");
   s.choice("calibration.emulator.trend", {"constant", "diagonal_quadratic", "full_quadratic"})
       .default_value("diagonal_quadratic")
-      .doc("Mean function of each feature's GP (Matern 5/2 kernel, estimated nugget).");
+      .doc("Mean function of each feature's GP.");
 
   s.section("calibration.posterior", "Sampling-importance-resampling of the prior pool (Smith & Gelfand 1992).");
   s.integer("calibration.posterior.n_samples").default_value("4000").range(Range::closed(10, 10000000))
@@ -385,7 +371,7 @@ CalibrationSettings read_calibration_settings(const Study& study) {
   emulator.n_initial = c.integer("calibration.emulator.initial_points");
   emulator.batch_size = c.integer("calibration.emulator.batch_size");
   emulator.max_evaluations = c.integer("calibration.emulator.max_evaluations");
-  emulator.variance_tolerance = c.number("calibration.emulator.variance_tolerance");
+  emulator.influence_tolerance = c.number("calibration.emulator.influence_tolerance");
   emulator.quantile_tolerance = c.number("calibration.emulator.quantile_tolerance");
   emulator.pool_size = c.integer("calibration.emulator.pool_size");
   emulator.smc.n_particles = c.integer("calibration.emulator.particles");

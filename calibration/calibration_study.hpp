@@ -19,7 +19,7 @@
 //                                          δ_j, a fixed model-discrepancy spread
 //                                          (Kennedy & O'Hagan 2001), 0 where not given
 //     method: sbalc | emulator               which route learns the posterior (calibrate.hpp)
-//     emulator: {initial_points, batch_size, max_evaluations, variance_tolerance,
+//     emulator: {initial_points, batch_size, max_evaluations, influence_tolerance,
 //                quantile_tolerance, pool_size, particles, seed, trend}   (emulator_calibration.hpp)
 //     sbalc: {pool_size, initial_points, batch_size, max_evaluations, tolerance,
 //             nugget: off | fixed | estimated, nugget_standard_deviation, seed,

@@ -108,7 +108,7 @@ EmulatorCalibration::EmulatorCalibration(int dimension, BatchFeatureFunction eva
   if (!evaluate_) throw std::invalid_argument("EmulatorCalibration: no evaluator");
   if (options_.batch_size < 1) throw std::invalid_argument("EmulatorCalibration: batch_size must be >= 1");
   if (options_.n_consecutive < 1) throw std::invalid_argument("EmulatorCalibration: n_consecutive must be >= 1");
-  if (!(options_.variance_tolerance > 0.0) || !(options_.quantile_tolerance > 0.0))
+  if (!(options_.influence_tolerance > 0.0) || !(options_.quantile_tolerance > 0.0))
     throw std::invalid_argument("EmulatorCalibration: tolerances must be positive");
   if (options_.initial_design && options_.initial_design->cols() != dimension_)
     throw std::invalid_argument("EmulatorCalibration: the initial design has " +
@@ -146,6 +146,11 @@ EmulatorCalibrationResult EmulatorCalibration::run() const {
                              std::to_string(initial.rows()) +
                              " runs of the initial design succeeded; the emulators need two or more");
 
+  FeatureWarping warping;
+  if (options_.warping_width > 0.0) {
+    warping.centre = likelihood_.observations().colwise().mean().transpose();
+    warping.width = options_.warping_width * emulated.mean_variances().cwiseSqrt();
+  }
   std::optional<FeatureEmulator> emulator;
   int consecutive = 0, previous_points = 0;
   const std::vector<double> probabilities{0.05, 0.5, 0.95};
@@ -157,7 +162,7 @@ EmulatorCalibrationResult EmulatorCalibration::run() const {
     it.n_evaluations = runs.n_evaluations;
     GaussianProcessOptions gp = options_.gp;
     gp.seed = options_.seed * 7919 + static_cast<std::uint64_t>(iteration) * 104729;
-    emulator = FeatureEmulator(runs.point_matrix(), runs.feature_matrix(), gp, emulator ? &*emulator : nullptr);
+    emulator = FeatureEmulator(runs.point_matrix(), runs.feature_matrix(), gp, emulator ? &*emulator : nullptr, warping);
     const FeatureEmulator& current = *emulator;
     const BatchLogDensity log_likelihood = [&](const Eigen::MatrixXd& points) {
       return emulated.log_likelihood(current.predict(points));
@@ -188,6 +193,24 @@ EmulatorCalibrationResult EmulatorCalibration::run() const {
       const double mean = values.dot(weights);
       it.posterior_sd(i) = std::sqrt(std::max(0.0, (values.array() - mean).square().matrix().dot(weights)));
     }
+    // Emulator influence: the posterior of the plug-in likelihood (the emulators' means,
+    // no emulator variance), importance-weighted on the same pool, against the pool's.
+    {
+      FeaturePrediction plug_in = current.predict(pool.points);
+      plug_in.latent_variance.setZero();
+      const Eigen::VectorXd plug_log = emulated.log_likelihood(plug_in) + pool.log_prior_over_proposal;
+      Eigen::VectorXd plug_weights = (plug_log.array() - plug_log.maxCoeff()).exp().matrix();
+      plug_weights /= plug_weights.sum();
+      it.plug_in_ess = 1.0 / plug_weights.squaredNorm();
+      double influence = 0.0;
+      for (int i = 0; i < d; ++i) {
+        const Eigen::VectorXd values = pool.points.col(i);
+        const Eigen::VectorXd plug_quantiles = weighted_quantiles(values, plug_weights, probabilities);
+        const double sd = std::max(it.posterior_sd(i), 1e-12);
+        influence = std::max(influence, (plug_quantiles - it.quantiles.row(i).transpose()).cwiseAbs().maxCoeff() / sd);
+      }
+      it.emulator_influence = influence;
+    }
     const FeaturePrediction at_particles = current.predict(sampled.particles);
     const Eigen::VectorXd irreducible = emulated.mean_variances() + at_particles.noise_variance;
     it.variance_ratios = at_particles.latent_variance.colwise().mean().transpose().cwiseQuotient(irreducible);
@@ -203,12 +226,13 @@ EmulatorCalibrationResult EmulatorCalibration::run() const {
       }
       it.quantile_shift = shift;
     }
-    it.variance_settled = it.max_variance_ratio <= options_.variance_tolerance;
+    it.influence_settled =
+        it.emulator_influence <= options_.influence_tolerance && it.plug_in_ess >= result.pool_ess_threshold;
     it.quantiles_settled = std::isfinite(it.quantile_shift) && it.quantile_shift <= options_.quantile_tolerance;
     it.pool_ess_sufficient = it.pool_ess >= result.pool_ess_threshold;
     const bool adds_data = iteration > 0 && it.n_points > previous_points;
     if (adds_data) {
-      it.counted = it.variance_settled && it.quantiles_settled && it.pool_ess_sufficient;
+      it.counted = it.influence_settled && it.quantiles_settled && it.pool_ess_sufficient;
       consecutive = it.counted ? consecutive + 1 : 0;
     }
     previous_points = it.n_points;
@@ -225,16 +249,18 @@ EmulatorCalibrationResult EmulatorCalibration::run() const {
     if (consecutive >= options_.n_consecutive || room <= 0) {
       result.converged = consecutive >= options_.n_consecutive;
       result.stop_reason = result.converged
-                               ? "converged: the emulators' variance and the posterior quantiles settled on " +
+                               ? "converged: the emulators' influence and the posterior quantiles settled on " +
                                      std::to_string(options_.n_consecutive) + " iterations in a row"
                                : "the cap of " + std::to_string(options_.max_evaluations) + " runs was reached";
       it.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+      if (options_.on_iteration) options_.on_iteration(it);
       result.history.push_back(std::move(it));
       break;
     }
     it.chosen_points = choose_batch(current, sampled.particles, runs.failed, irreducible,
                                     std::min(options_.batch_size, room));
     it.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    if (options_.on_iteration) options_.on_iteration(it);
     result.history.push_back(it);
     const std::vector<Eigen::VectorXd> thetas = rows_of(it.chosen_points);
     runs.add(thetas, evaluate_(thetas), p);
@@ -262,9 +288,9 @@ EmulatorCalibrationResult EmulatorCalibration::run() const {
   }
   if (!result.converged) {
     std::string failing;
-    if (!last.variance_settled)
-      failing += "the emulators' variance ratio " + shortest(last.max_variance_ratio) + " > " +
-                 shortest(options_.variance_tolerance);
+    if (!last.influence_settled)
+      failing += "the emulators' influence " + shortest(last.emulator_influence) + " posterior sd > " +
+                 shortest(options_.influence_tolerance) + " (plug-in pool ESS " + shortest(last.plug_in_ess) + ")";
     if (!last.quantiles_settled)
       failing += std::string(failing.empty() ? "" : "; ") + "the quantile shift " + shortest(last.quantile_shift) +
                  " posterior sd > " + shortest(options_.quantile_tolerance);

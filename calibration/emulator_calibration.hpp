@@ -4,7 +4,8 @@
 //
 // Works in the unit cube u ∈ [0,1]^d where the prior is uniform (as SBALC does). With
 // the runs so far (successful ones: points U, features F):
-//   1. fit the feature emulators (feature_emulator.hpp) and form the emulated
+//   1. fit the feature emulators (feature_emulator.hpp; optionally each feature warped
+//      about its observed mean, warping_width standard errors wide) and form the emulated
 //      log-likelihood ln L̃(u), which carries each emulator's variance s_j²(u) and nugget
 //      τ_j² beside the measurement variance;
 //   2. sample π̃(u) ∝ L̃(u) by tempered SMC and importance sampling (tempered_smc.hpp):
@@ -12,18 +13,22 @@
 //   3. two checks, both required on n_consecutive counted iterations in a row (an
 //      iteration counts if it follows the initial design and holds more runs than the
 //      previous one):
-//      - emulator variance: for every feature j,
-//            r_j = E_π̃[s_j²(u)] / (V_j/N + τ_j²) ≤ variance_tolerance   (0.1),
-//        the emulator's own variance over the posterior at most a tenth of the variance
-//        it cannot remove (the data's mean, V_j/N, and the model's noise τ_j²). Then L̃
-//        differs from the likelihood of the smooth model by at most that share of its
-//        variance, and the posterior's width by about half of it;
-//      - stable quantiles: the 5 %, 50 % and 95 % quantiles of every u_i moved by at
-//        most quantile_tolerance (0.2) posterior standard deviations since the previous
-//        iteration: the answer a user reads no longer changes with more runs;
+//      - emulator influence: the posterior of the plug-in likelihood (the emulators'
+//        means with s_j² = 0), importance-weighted on the same pool, has its 5 %, 50 % and
+//        95 % quantiles of every u_i within influence_tolerance (0.2) posterior standard
+//        deviations of the pool's, and an effective sample size above the threshold
+//        below: what the emulators do not yet know no longer moves the answer (in the
+//        manner of the GP-uncertainty stopping rules of Järvenpää et al. 2019, "Efficient
+//        acquisition rules for model-based approximate Bayesian computation");
+//      - stable quantiles: the same quantiles moved by at most quantile_tolerance (0.2)
+//        posterior standard deviations since the previous iteration: the answer a user
+//        reads no longer changes with more runs;
 //      and the importance pool's effective sample size at least
 //      max(min_pool_ess, min_pool_ess_fraction · pool_size), so that the figures rest on
-//      enough points (the same guard as SBALC's);
+//      enough points (the same guard as SBALC's). Reported beside them, not a check: the
+//      variance ratio r_j = E_π̃[s_j²(u)] / (V_j/N + τ_j²) of each feature, the emulator's
+//      own variance over the posterior against the variance no run removes (the data's
+//      mean, V_j/N, and the model's noise τ_j²);
 //   4. otherwise choose batch_size new points among the SMC particles (draws of π̃), each
 //      maximising a(u) = Σ_j s_j²(u) / (V_j/N + τ_j²) of emulators conditioned on the
 //      points chosen before it at their own means (kriging believer: the variance shrinks
@@ -59,20 +64,26 @@ namespace rsw::calibration {
 using BatchFeatureFunction =
     std::function<std::vector<std::optional<Eigen::VectorXd>>(const std::vector<Eigen::VectorXd>& thetas_unit)>;
 
+struct EmulatorIteration;
+
 struct EmulatorCalibrationOptions {
   int n_initial = 0;               // 0: 10 d
   int batch_size = 4;
   int max_evaluations = 150;       // all runs, initial design and failures included
-  double variance_tolerance = 0.1;
-  double quantile_tolerance = 0.2;
+  double influence_tolerance = 0.2;  // posterior sd
+  double quantile_tolerance = 0.2;   // posterior sd
   int n_consecutive = 2;
   int pool_size = 20000;           // importance samples
   double min_pool_ess = 100.0;
   double min_pool_ess_fraction = 0.01;
   TemperedSmcOptions smc;          // its seed is replaced by one derived from `seed`
   GaussianProcessOptions gp = default_gp();  // per feature
+  // Each feature's GP learns asinh((y − Ȳ_j)/w_j), w_j = warping_width · √(V_j/N)
+  // (feature_emulator.hpp, "Warping"); 0: the features themselves.
+  double warping_width = 0.0;
   std::uint64_t seed = 1;
   std::optional<Eigen::MatrixXd> initial_design;  // rows in [0,1]^d, replaces the Latin hypercube
+  std::function<void(const EmulatorIteration&)> on_iteration;  // progress, after each iteration's checks
 
   // Matérn 5/2, a diagonal quadratic trend, an estimated nugget, two random restarts.
   static GaussianProcessOptions default_gp();
@@ -93,7 +104,9 @@ struct EmulatorIteration {
   Eigen::MatrixXd quantiles;            // d × 3: 5 %, 50 %, 95 % of each u_i
   Eigen::VectorXd posterior_sd;         // of each u_i
   double quantile_shift = 0.0;          // NaN on the first iteration
-  bool variance_settled = false;
+  double emulator_influence = 0.0;      // largest quantile difference plug-in vs pool, posterior sd
+  double plug_in_ess = 0.0;             // effective sample size of the plug-in weights
+  bool influence_settled = false;
   bool quantiles_settled = false;
   bool pool_ess_sufficient = false;
   bool counted = false;

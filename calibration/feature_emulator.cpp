@@ -6,11 +6,14 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace rsw::calibration {
 
 FeatureEmulator::FeatureEmulator(const Eigen::MatrixXd& inputs, const Eigen::MatrixXd& features,
-                                 const GaussianProcessOptions& options, const FeatureEmulator* previous) {
+                                 const GaussianProcessOptions& options, const FeatureEmulator* previous,
+                                 FeatureWarping warping)
+    : warping_(std::move(warping)) {
   if (inputs.rows() != features.rows())
     throw std::invalid_argument("FeatureEmulator: " + std::to_string(inputs.rows()) + " points but " +
                                 std::to_string(features.rows()) + " feature rows");
@@ -19,10 +22,15 @@ FeatureEmulator::FeatureEmulator(const Eigen::MatrixXd& inputs, const Eigen::Mat
   if (previous != nullptr && previous->n_features() != features.cols())
     throw std::invalid_argument("FeatureEmulator: the previous emulator has another number of features");
   const Eigen::Index p = features.cols();
+  const bool warped = warping_.centre.size() > 0;
+  if (warped && (warping_.centre.size() != p || warping_.width.size() != p || !(warping_.width.array() > 0.0).all()))
+    throw std::invalid_argument("FeatureEmulator: a warping needs a centre and a positive width per feature");
   offsets_.resize(p);
   scales_.resize(p);
   for (Eigen::Index j = 0; j < p; ++j) {
-    const Eigen::VectorXd column = features.col(j);
+    const Eigen::VectorXd column =
+        warped ? Eigen::VectorXd(((features.col(j).array() - warping_.centre(j)) / warping_.width(j)).asinh())
+               : Eigen::VectorXd(features.col(j));
     const double mean = column.mean();
     const double variance = (column.array() - mean).square().sum() / static_cast<double>(column.size() - 1);
     offsets_(j) = mean;
@@ -51,9 +59,11 @@ FeaturePrediction FeatureEmulator::predict(const Eigen::MatrixXd& points) const 
   prediction.mean.resize(m, p);
   prediction.latent_variance.resize(m, p);
   prediction.noise_variance.resize(p);
+  const bool warped = warping_.centre.size() > 0;
   for (Eigen::Index j = 0; j < p; ++j) {
+    const double at_data = warped ? warping_.width(j) : 1.0;  // dy/dz at z = 0
     prediction.noise_variance(j) = processes_[static_cast<std::size_t>(j)].hyperparameters().noise_variance *
-                                   scales_(j) * scales_(j);
+                                   scales_(j) * scales_(j) * at_data * at_data;
   }
   // Blocks of points on the process's threads; Eigen runs serially inside the region,
   // so each block is computed the same way whatever the thread count.
@@ -66,8 +76,16 @@ FeaturePrediction FeatureEmulator::predict(const Eigen::MatrixXd& points) const 
     for (Eigen::Index j = 0; j < p; ++j) {
       const GaussianProcessPrediction one = processes_[static_cast<std::size_t>(j)].predict(chunk);
       const double scale = scales_(j);
-      prediction.mean.col(j).segment(start, rows) = (one.mean.array() * scale + offsets_(j)).matrix();
-      prediction.latent_variance.col(j).segment(start, rows) = one.latent_variance * (scale * scale);
+      const Eigen::ArrayXd mean = one.mean.array() * scale + offsets_(j);
+      const Eigen::ArrayXd variance = one.latent_variance.array() * (scale * scale);
+      if (warped) {
+        const double c = warping_.centre(j), w = warping_.width(j);
+        prediction.mean.col(j).segment(start, rows) = (c + w * mean.sinh()).matrix();
+        prediction.latent_variance.col(j).segment(start, rows) = (variance * (w * mean.cosh()).square()).matrix();
+      } else {
+        prediction.mean.col(j).segment(start, rows) = mean.matrix();
+        prediction.latent_variance.col(j).segment(start, rows) = variance.matrix();
+      }
     }
   }
   return prediction;
@@ -77,6 +95,7 @@ FeatureEmulator FeatureEmulator::with_believed_point(const Eigen::VectorXd& x) c
   FeatureEmulator believed;
   believed.offsets_ = offsets_;
   believed.scales_ = scales_;
+  believed.warping_ = warping_;
   for (const GaussianProcess& process : processes_) {
     believed.processes_.push_back(process.with_added_point(x, process.predict(x).mean(0)));
   }

@@ -22,6 +22,16 @@
 // elsewhere the emulator's uncertainty widens the likelihood instead of biasing it
 // (Kennedy & O'Hagan 2001, §4; Higdon et al. 2004, "Combining field data and computer
 // simulations for calibration and prediction").
+//
+// Warping (optional, per feature; Snelson, Rasmussen & Ghahramani 2004, "Warped Gaussian
+// processes"). A feature can span a hundred times the data's precision over the prior
+// (R_beta of the weld: 300–950 µΩ, against 3.5 µΩ for the mean of three welds), most of
+// it in a corner; a stationary GP fitted to that range needs short length scales
+// everywhere and stays uncertain where the posterior lives. The GP then learns
+//     z = asinh((y − c)/w)       (c the observed mean, w a multiple of its standard error),
+// which is linear within a few w of the data and logarithmic beyond, and the prediction
+// goes back by the delta method: y = c + w sinh(m_z), s_y = w cosh(m_z) s_z, exact as
+// s_z → 0. The nugget is reported at the data (τ_y = w τ_z), where it matters.
 // Units: u dimensionless; m_j, s_j, τ_j, Y, σ in the feature's SI unit.
 #pragma once
 
@@ -40,12 +50,17 @@ struct FeaturePrediction {
   Eigen::VectorXd noise_variance;   // p, τ_j²
 };
 
+// Per feature j: centre c_j and width w_j > 0 of the warping above; empty: none.
+struct FeatureWarping {
+  Eigen::VectorXd centre, width;
+};
+
 class FeatureEmulator {
  public:
   // inputs: n × d unit-cube points; features: n × p finite values. `previous` (same p),
   // if given, warm-starts each feature's hyperparameter search.
   FeatureEmulator(const Eigen::MatrixXd& inputs, const Eigen::MatrixXd& features, const GaussianProcessOptions& options,
-                  const FeatureEmulator* previous = nullptr);
+                  const FeatureEmulator* previous = nullptr, FeatureWarping warping = {});
 
   FeaturePrediction predict(const Eigen::MatrixXd& points) const;
   // The same hyperparameters conditioned on one more point at each feature's own mean
@@ -55,13 +70,14 @@ class FeatureEmulator {
   int n_features() const { return static_cast<int>(processes_.size()); }
   int n_points() const { return processes_.empty() ? 0 : processes_.front().n_points(); }
   const std::vector<GaussianProcess>& processes() const { return processes_; }
-  const Eigen::VectorXd& offsets() const { return offsets_; }  // ȳ_j
-  const Eigen::VectorXd& scales() const { return scales_; }    // sd_j
+  const Eigen::VectorXd& offsets() const { return offsets_; }  // mean of the GP's outputs
+  const Eigen::VectorXd& scales() const { return scales_; }    // their sd
 
  private:
   FeatureEmulator() = default;
   std::vector<GaussianProcess> processes_;
-  Eigen::VectorXd offsets_, scales_;
+  Eigen::VectorXd offsets_, scales_;  // of the GP's outputs (z if warped)
+  FeatureWarping warping_;
 };
 
 // ln L̃ above for the observations and noise of `likelihood`.

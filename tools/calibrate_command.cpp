@@ -287,8 +287,8 @@ void write_posterior_csv(const fs::path& path, const cal::CalibrationResult& res
 // Columns of the emulator route's diagnostics table, then one variance ratio per feature.
 const std::vector<std::string> emulator_diagnostics_columns = {
     "iteration", "n_points", "n_evaluations", "log_evidence", "evidence_relative_error", "smc_log_evidence",
-    "n_temperatures", "pool_ess", "max_variance_ratio", "quantile_shift", "variance_settled", "quantiles_settled",
-    "counted", "n_chosen", "seconds"};
+    "n_temperatures", "pool_ess", "emulator_influence", "plug_in_ess", "quantile_shift", "influence_settled",
+    "quantiles_settled", "counted", "max_variance_ratio", "n_chosen", "seconds"};
 
 Eigen::MatrixXd emulator_diagnostics_table(const cal::CalibrationResult& result) {
   const auto p = static_cast<Eigen::Index>(result.feature_names.size());
@@ -298,9 +298,9 @@ Eigen::MatrixXd emulator_diagnostics_table(const cal::CalibrationResult& result)
     const cal::EmulatorIteration& it = result.emulator_history[k];
     const auto r = static_cast<Eigen::Index>(k);
     table.row(r).head(n_fixed) << static_cast<double>(k), it.n_points, it.n_evaluations, it.log_evidence,
-        it.evidence_relative_error, it.smc_log_evidence, it.n_temperatures, it.pool_ess, it.max_variance_ratio,
-        it.quantile_shift, it.variance_settled ? 1.0 : 0.0, it.quantiles_settled ? 1.0 : 0.0, it.counted ? 1.0 : 0.0,
-        static_cast<double>(it.chosen_points.rows()), it.seconds;
+        it.evidence_relative_error, it.smc_log_evidence, it.n_temperatures, it.pool_ess, it.emulator_influence,
+        it.plug_in_ess, it.quantile_shift, it.influence_settled ? 1.0 : 0.0, it.quantiles_settled ? 1.0 : 0.0,
+        it.counted ? 1.0 : 0.0, it.max_variance_ratio, static_cast<double>(it.chosen_points.rows()), it.seconds;
     table.row(r).tail(p) = it.variance_ratios.transpose();
   }
   return table;
@@ -403,9 +403,11 @@ Json emulator_json(const cal::CalibrationResult& result, const cal::CalibrationS
                         {"variance_ratio", last.variance_ratios[jj]},
                         {"noise_standard_deviation", last.noise_standard_deviations[jj]}});
   }
-  return {{"variance_tolerance", settings.emulator.variance_tolerance},
+  return {{"influence_tolerance", settings.emulator.influence_tolerance},
           {"quantile_tolerance", settings.emulator.quantile_tolerance},
           {"trend", trend_name(settings.emulator.gp.trend)},
+          {"emulator_influence", last.emulator_influence},
+          {"plug_in_ess", last.plug_in_ess},
           {"max_variance_ratio", last.max_variance_ratio},
           {"quantile_shift", finite_or_null(last.quantile_shift)},
           {"smc_log_evidence", last.smc_log_evidence},
@@ -752,10 +754,11 @@ void run_calibrate(const CalibrateOptions& options, const ForwardModelFactory& f
                 result.noise_standard_deviation);
   } else if (!result.emulator_history.empty()) {
     const cal::EmulatorIteration& last = result.emulator_history.back();
-    std::printf("  evidence ln Z = %.6g (Monte Carlo error %.2g %%, pool ESS %.1f); emulator variance ratio %.3g "
-                "(tolerance %.3g), quantile shift %.3g sd (tolerance %.3g)\n",
-                result.log_evidence, 100.0 * result.pool_relative_error, result.pool_ess, last.max_variance_ratio,
-                settings.emulator.variance_tolerance, last.quantile_shift, settings.emulator.quantile_tolerance);
+    std::printf("  evidence ln Z = %.6g (Monte Carlo error %.2g %%, pool ESS %.1f); emulators' influence %.3g sd "
+                "(tolerance %.3g), quantile shift %.3g sd (tolerance %.3g), variance ratio %.3g\n",
+                result.log_evidence, 100.0 * result.pool_relative_error, result.pool_ess, last.emulator_influence,
+                settings.emulator.influence_tolerance, last.quantile_shift, settings.emulator.quantile_tolerance,
+                last.max_variance_ratio);
   }
   const int percent = static_cast<int>(std::lround(100 * result.credible_level));
   for (std::size_t i = 0; i < result.parameter_names.size(); ++i) {

@@ -191,14 +191,14 @@ def plot_emulator_convergence(name, summary, table, columns, out_dir, dpi):
     ax_z.set_ylabel("ln evidence")
     ax_z.grid(True, alpha=0.3)
     ax_z.legend(fontsize=8)
-    ratio = table[:, column["max_variance_ratio"]]
+    influence = table[:, column["emulator_influence"]]
     shift = table[:, column["quantile_shift"]]
-    ax_r.semilogy(n, np.where(ratio > 0, ratio, np.nan), "o-", color="C1", markersize=3,
-                  label="emulator variance ratio (largest feature)")
+    ax_r.semilogy(n, np.where(influence > 0, influence, np.nan), "o-", color="C1", markersize=3,
+                  label="emulators' influence [posterior sd]")
     ax_r.semilogy(n, np.where(shift > 0, shift, np.nan), "s-", color="C2", markersize=3,
                   label="quantile shift [posterior sd]")
-    if "variance_tolerance" in emulator:
-        ax_r.axhline(emulator["variance_tolerance"], color="C1", linestyle="--", linewidth=0.8)
+    if "influence_tolerance" in emulator:
+        ax_r.axhline(emulator["influence_tolerance"], color="C1", linestyle="--", linewidth=0.8)
     if "quantile_tolerance" in emulator:
         ax_r.axhline(emulator["quantile_tolerance"], color="C2", linestyle="--", linewidth=0.8)
     ax_r.set_xlabel("forward-model runs")

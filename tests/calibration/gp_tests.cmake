@@ -22,3 +22,8 @@ add_executable(test_calibration_emulator
   ${CMAKE_CURRENT_LIST_DIR}/test_emulator_calibration.cpp)
 target_link_libraries(test_calibration_emulator PRIVATE rsw_calibration GTest::gtest_main)
 gtest_discover_tests(test_calibration_emulator PROPERTIES LABELS verification DISCOVERY_TIMEOUT 60)
+
+# Coverage of the emulator route over 50 data sets of a 3-D and a 6-D model (minutes).
+add_executable(test_calibration_coverage ${CMAKE_CURRENT_LIST_DIR}/test_emulator_coverage.cpp)
+target_link_libraries(test_calibration_coverage PRIVATE rsw_calibration GTest::gtest_main)
+gtest_discover_tests(test_calibration_coverage PROPERTIES LABELS verification TIMEOUT 1800 DISCOVERY_TIMEOUT 60)
