@@ -633,7 +633,7 @@ struct Mechanics::Impl {
   void contact_point(int p, int idx, double share, const PointDofs& point_dofs, fem::LocalSystem& local) {
     const auto& pt = pass(p).points()[idx];
     const double eps_n = normal_penalty[p];
-    const double eps_t = settings.tangential_penalty_ratio * eps_n;
+    const double eps_t = settings.friction_penalty_ratio * eps_n;
     const double mu = settings.friction_coefficient;
     // Nv, Tv: the gap and slip operators (g' = Nvᵀ u', slip' = Tvᵀ u' at fixed geometry).
     Vector8 Nv, Tv, du;

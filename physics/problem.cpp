@@ -470,6 +470,11 @@ ConfigSchema weld_case_schema() {
   return schema;
 }
 
+double case_default(const std::string& key) {
+  static const Config defaults(weld_case_schema());
+  return defaults.number(key);
+}
+
 Problem make_problem(const Config& config) {
   Problem problem;
   problem.name = config.text("case.name");

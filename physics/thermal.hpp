@@ -101,11 +101,12 @@ namespace rsw::physics {
 struct ThermalSettings {
   int n_gauss = 2;                    // per direction; must match the electrical solver's
   double search_margin = 0.5e-3;      // m, of the pairings (must equal the mechanics')
-  double initial_temperature = 20.0;  // °C
-  double water_htc = 4e4;             // W/(m²K), on "*<water_suffix>"
-  double water_temperature = 20.0;    // °C
-  double air_htc = 20.0;              // W/(m²K), other named outer boundaries
-  double ambient_temperature = 20.0;  // °C
+  // The weld case's initial and boundary values (thermal.*), defaults from its schema.
+  double initial_temperature = case_default("thermal.initial_temperature");  // °C
+  double water_htc = case_default("thermal.water_htc");                      // W/(m²K), on "*<water_suffix>"
+  double water_temperature = case_default("thermal.water_temperature");      // °C
+  double air_htc = case_default("thermal.air_htc");                          // W/(m²K), other named outer boundaries
+  double ambient_temperature = case_default("thermal.ambient_temperature");  // °C
   std::string water_suffix = ".cooling_bore";
   std::vector<std::string> adiabatic_suffixes = {".axis", ".end_face"};
   // Fixed temperatures (°C) on named boundaries (verification problems); these
