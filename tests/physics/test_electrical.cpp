@@ -56,7 +56,7 @@ contact::ContactState fixed_contact(const std::vector<contact::InterfacePairing>
 fem::Mesh two_block_column(double L, double radius, double lower_size, double upper_size) {
   fem::Mesh mesh = test::block_mesh("lower", 0, radius, 0, L, lower_size);
   mesh.append(test::block_mesh("upper", 0, radius, L, 2 * L, upper_size));
-  mesh.interfaces["contact"] = {"upper.bottom", "lower.top"};
+  mesh.interfaces["contact"] = {"upper.bottom", "lower.top", "film_contact"};
   return mesh;
 }
 
@@ -286,7 +286,7 @@ TEST(Electrical, FloatingBodyIsReported) {
   const auto metal = conductor("metal", 1e-7, 300e6);
   fem::Mesh mesh = test::block_mesh("lower", 0, 1e-3, 0, 1e-3, 0.25e-3);
   mesh.append(test::block_mesh("upper", 0, 1e-3, 1e-3, 2e-3, 0.25e-3));
-  mesh.interfaces["contact"] = {"upper.bottom", "lower.top"};
+  mesh.interfaces["contact"] = {"upper.bottom", "lower.top", "film_contact"};
   contact::InterfaceModel model;
   model.interfaces = {{"contact", 1e-6, 2e-6, 1e-3, false}};
   physics::ElectricalSettings s;

@@ -220,7 +220,7 @@ TEST(ThermalVerification, TwoBlockElectroThermalContactMatchesClosedForm) {
   const auto upper_mat = make_material(upper_spec);
   fem::Mesh mesh = test::block_mesh("lower", 0, R, 0, L, L / 8);
   mesh.append(test::block_mesh("upper", 0, R, L, 2 * L, L / 8));
-  mesh.interfaces["contact"] = {"upper.bottom", "lower.top"};
+  mesh.interfaces["contact"] = {"upper.bottom", "lower.top", "film_contact"};
   contact::InterfaceModel model;
   model.interfaces = {{"contact", 1e-4, 1e-5, 1e-3, false}};
   const std::vector<const materials::Material*> mats{&lower_mat, &upper_mat};
@@ -388,7 +388,7 @@ TEST(ThermalVerification, EnergyIsConservedThroughMeltingAndBonding) {
   const double R = 0.5e-3, t = 0.5e-3, current = 800.0, dt = 0.5e-3;
   fem::Mesh mesh = test::block_mesh("sheet_2", 0, R, -t, 0, t / 8);
   mesh.append(test::block_mesh("sheet_1", 0, R, 0, t, t / 8));
-  mesh.interfaces["ss_1_2"] = {"sheet_1.bottom", "sheet_2.top"};
+  mesh.interfaces["ss_1_2"] = {"sheet_1.bottom", "sheet_2.top", meshes::interface_kind::sheet_sheet};
   contact::InterfaceModel model;
   model.interfaces = {{"ss_1_2", 1e-5, 2e-5, 1e-3, true}};
   const std::vector<const materials::Material*> mats{&steel, &steel};
@@ -452,7 +452,7 @@ TEST(ThermalNewton, TangentMatchesFiniteDifferences) {
   const double R = 0.5e-3, t = 0.5e-3;
   fem::Mesh mesh = test::block_mesh("sheet_2", 0, R, -t, 0, t / 4);
   mesh.append(test::block_mesh("sheet_1", 0, R, 0, t, t / 4));
-  mesh.interfaces["ss_1_2"] = {"sheet_1.bottom", "sheet_2.top"};
+  mesh.interfaces["ss_1_2"] = {"sheet_1.bottom", "sheet_2.top", meshes::interface_kind::sheet_sheet};
   contact::InterfaceModel model;
   model.interfaces = {{"ss_1_2", 1e-5, 2e-5, 1e-3, true}};
   physics::ThermalSettings ts;
