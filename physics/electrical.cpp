@@ -84,7 +84,6 @@ double ElectricalSolution::total_interface_power() const {
 
 struct Electrical::Impl {
   const fem::Mesh& mesh;
-  fem::Mesh current;  // the configuration of the last solve
   ElectricalSettings settings;
   contact::InterfaceModel model;
   std::vector<const materials::Material*> body_material;
@@ -114,22 +113,23 @@ struct Electrical::Impl {
   const Eigen::VectorXd* temperature = nullptr;
   const contact::ContactState* contact = nullptr;
   // Gauss-point data (current configuration): σ of the last assembly, geometry.
-  std::vector<double> sigma, JxW;
-  std::vector<Eigen::Vector2d> grad;  // per cell Gauss point, 4 shape functions
-  std::vector<std::array<double, 4>> shape;  // N_a at the reference Gauss points
-  bool geometry_valid = false;
+  std::vector<double> sigma;
+  fem::CellGeometry geometry;
+  const std::vector<double>& JxW = geometry.JxW();
+  const std::vector<Eigen::Vector2d>& grad = geometry.grad();     // per cell Gauss point, 4 shape functions
+  const std::vector<std::array<double, 4>>& shape = geometry.shape();  // N_a at the reference Gauss points
 
   Impl(const fem::Mesh& m, std::vector<const materials::Material*> materials_of_body, contact::InterfaceModel mdl,
        const ElectricalSettings& s)
       : mesh(m),
-        current(m),
         settings(s),
         model(std::move(mdl)),
         body_material(std::move(materials_of_body)),
         n_q(s.n_gauss * s.n_gauss),
         dofs(m, 1, 1),
         voltage_dof(dofs.extra_dof(0)),
-        constraints(dofs.n_dofs()) {
+        constraints(dofs.n_dofs()),
+        geometry(m, s.n_gauss) {
     if (s.n_gauss < 1 || s.n_gauss > 3) throw std::invalid_argument("Electrical: n_gauss must be 1, 2 or 3");
     if (static_cast<int>(body_material.size()) != mesh.n_bodies())
       throw std::invalid_argument("Electrical: one material per body expected");
@@ -172,13 +172,7 @@ struct Electrical::Impl {
     ground_body = mesh.node_body[mesh.boundary_nodes(s.ground_boundary).front()];
     for (const auto& probe : s.probes) probes.push_back({locate_point(mesh, probe.upper), locate_point(mesh, probe.lower)});
 
-    const std::size_t n_points = static_cast<std::size_t>(mesh.n_cells()) * n_q;
-    sigma.assign(n_points, 0.0);
-    JxW.assign(n_points, 0.0);
-    grad.assign(4 * n_points, Eigen::Vector2d::Zero());
-    fem::CellValues cv(s.n_gauss);
-    cv.reinit(mesh, 0);
-    for (int q = 0; q < n_q; ++q) shape.push_back({cv.N(q, 0), cv.N(q, 1), cv.N(q, 2), cv.N(q, 3)});
+    sigma.assign(static_cast<std::size_t>(mesh.n_cells()) * n_q, 0.0);
   }
 
   void check_contact(const contact::ContactState& state) const {
@@ -264,23 +258,6 @@ struct Electrical::Impl {
                                  "' has no conducting path to the ground face (no closed contact)");
   }
 
-  // Gauss-point geometry (∇N, JxW) of every cell for the node positions; kept while
-  // the positions do not change (the coupling iterations of one step).
-  void update_geometry(const std::vector<fem::Point>& positions) {
-    if (geometry_valid && positions == current.nodes) return;
-    current.nodes = positions;
-    fem::CellValues cv(settings.n_gauss);
-    for (int e = 0; e < mesh.n_cells(); ++e) {
-      cv.reinit(current, e);
-      for (int q = 0; q < n_q; ++q) {
-        const std::size_t k = static_cast<std::size_t>(e) * n_q + q;
-        JxW[k] = cv.JxW(q);
-        for (int a = 0; a < 4; ++a) grad[4 * k + a] = cv.grad_N(q, a);
-      }
-    }
-    geometry_valid = true;
-  }
-
   // ∫ σ ∇N_a·∇N_b dV with σ = 1/ρ_e(T) at each Gauss point.
   void cell_kernel(int e, fem::LocalSystem& local) {
     const auto& c = mesh.cells[e];
@@ -341,7 +318,7 @@ const ElectricalSolution& Electrical::solve(const std::vector<fem::Point>& posit
   if (static_cast<int>(positions.size()) != mesh.n_nodes() || nodal_temperature.size() != mesh.n_nodes())
     throw std::invalid_argument("Electrical: positions and temperatures must have one entry per node");
   m.check_contact(contact);
-  m.update_geometry(positions);
+  m.geometry.update(positions);
   m.temperature = &nodal_temperature;
   m.contact = &contact;
   ElectricalSolution& sol = solution_;

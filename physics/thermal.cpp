@@ -49,7 +49,6 @@ ThermalSettings thermal_settings(const ThermalParameters& p) {
 
 struct Thermal::Impl {
   const fem::Mesh& mesh;
-  fem::Mesh current;  // configuration of the last solve
   ThermalSettings settings;
   contact::InterfaceModel model;
   std::vector<const materials::Material*> body_material;
@@ -88,10 +87,11 @@ struct Thermal::Impl {
   bool start_given = false;            // set_start() before the next solve
   contact::BondingState bonding, trial_bonding;
   std::vector<std::vector<double>> conductance;  // per pairing point, last evaluation
-  std::vector<double> JxW;                       // per cell Gauss point, current configuration
-  std::vector<Eigen::Vector2d> grad;             // ∇N_a per cell Gauss point
-  std::vector<std::array<double, 4>> shape;      // N_a at the reference Gauss points
-  bool geometry_valid = false;
+  fem::CellGeometry geometry;                    // of the configuration of the last solve
+  const fem::Mesh& current = geometry.current();
+  const std::vector<double>& JxW = geometry.JxW();                     // per cell Gauss point
+  const std::vector<Eigen::Vector2d>& grad = geometry.grad();          // ∇N_a per cell Gauss point
+  const std::vector<std::array<double, 4>>& shape = geometry.shape();  // N_a at the reference Gauss points
   bool need_matrix = true;                       // kernels compute ∂R/∂T too
   bool factorized = false;                       // the solver holds a factorisation of this step
   long n_solves = 0, n_factorizations = 0;       // summed over the run (solver_counts)
@@ -106,7 +106,6 @@ struct Thermal::Impl {
   Impl(const fem::Mesh& m, std::vector<const materials::Material*> materials_of_body, contact::InterfaceModel mdl,
        const ThermalSettings& s)
       : mesh(m),
-        current(m),
         settings(s),
         model(std::move(mdl)),
         body_material(std::move(materials_of_body)),
@@ -114,7 +113,8 @@ struct Thermal::Impl {
         dofs(m, 1),
         constraints(dofs.n_dofs()),
         implicit_blend(s.melt_conductivity > 0 && s.melt_smoothing > 0 && s.implicit_melt_blend),
-        solver(implicit_blend ? fem::SolverKind::klu : fem::SolverKind::cholmod) {
+        solver(implicit_blend ? fem::SolverKind::klu : fem::SolverKind::cholmod),
+        geometry(m, s.n_gauss) {
     // The unsymmetric tangent (λ_m blend) is factorised by KLU, which refactorises each
     // new tangent of the fixed pattern with the pivot sequence of the last pivoted
     // factorisation (fem::LinearSolver; test
@@ -196,9 +196,6 @@ struct Thermal::Impl {
     melt_state.assign(static_cast<std::size_t>(mesh.n_cells()) * n_q, 0);
     conductivity_q.assign(melt_state.size(), 0.0);
     table_conductivity_q.assign(melt_state.size(), 0.0);
-    JxW.assign(melt_state.size(), 0.0);
-    grad.assign(4 * melt_state.size(), Eigen::Vector2d::Zero());
-    for (int q = 0; q < n_q; ++q) shape.push_back({cv.N(q, 0), cv.N(q, 1), cv.N(q, 2), cv.N(q, 3)});
     set_temperature(Eigen::VectorXd::Constant(mesh.n_nodes(), s.initial_temperature));
   }
 
@@ -275,23 +272,6 @@ struct Thermal::Impl {
         }
       }
     }
-  }
-
-  // Gauss-point geometry (∇N, JxW) of every cell for the node positions; kept while
-  // the positions do not change (the coupling iterations of one step).
-  void update_geometry(const std::vector<fem::Point>& positions) {
-    if (geometry_valid && positions == current.nodes) return;
-    current.nodes = positions;
-    fem::CellValues cv(settings.n_gauss);
-    for (int e = 0; e < mesh.n_cells(); ++e) {
-      cv.reinit(current, e);
-      for (int q = 0; q < n_q; ++q) {
-        const std::size_t k = static_cast<std::size_t>(e) * n_q + q;
-        JxW[k] = cv.JxW(q);
-        for (int a = 0; a < 4; ++a) grad[4 * k + a] = cv.grad_N(q, a);
-      }
-    }
-    geometry_valid = true;
   }
 
   // Capacity, conduction and bulk source of one cell; local.vector = −R_e, matrix = ∂R_e/∂T.
@@ -582,7 +562,7 @@ ThermalStepReport Thermal::solve(double dt, const std::vector<fem::Point>& posit
   if (static_cast<int>(positions.size()) != m.mesh.n_nodes())
     throw std::invalid_argument("Thermal: one position per node expected");
   m.check_inputs(contact, joule_heat, interface_heat);
-  m.update_geometry(positions);
+  m.geometry.update(positions);
   m.dt = dt;
   m.contact = &contact;
   m.joule = &joule_heat;
@@ -742,7 +722,7 @@ void Thermal::residual_and_tangent(double dt, const std::vector<fem::Point>& pos
                                    Eigen::VectorXd& residual, Eigen::SparseMatrix<double>& tangent) {
   Impl& m = *impl_;
   m.check_inputs(contact, joule_heat, interface_heat);
-  m.update_geometry(positions);
+  m.geometry.update(positions);
   m.dt = dt;
   m.contact = &contact;
   m.joule = &joule_heat;
