@@ -20,7 +20,8 @@ namespace rsw::physics {
 
 // The law of an interface kind with the case's parameters; throws
 // std::invalid_argument for a kind without a law.
-std::shared_ptr<const contact::InterfaceLaw> interface_law(const std::string& kind, const ContactParameters& parameters);
+std::shared_ptr<const contact::InterfaceLaw> interface_law(const std::string& kind,
+                                                           const ContactParameters& parameters);
 
 // One law per mesh interface, in mesh.interfaces order, by kind; throws
 // std::invalid_argument naming an interface whose kind has no law.

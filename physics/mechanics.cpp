@@ -202,7 +202,7 @@ struct Mechanics::Impl {
           auto n = mesh.face_nodes(f);
           h = std::min(h, (mesh.nodes[n[1]] - mesh.nodes[n[0]]).norm());
         }
-      normal_penalty.push_back(s.penalty_factor * E / h);
+      normal_penalty.push_back(s.contact_penalty_factor * E / h);
       area_weight.push_back(two_pass(name) ? 0.5 : 1.0);
     }
     for (std::size_t p = 0; p < pairings.size(); ++p) {

@@ -472,6 +472,8 @@ ConfigSchema weld_case_schema() {
 
 double case_default(const std::string& key) {
   static const Config defaults(weld_case_schema());
+  const fem::KeySpec* spec = defaults.schema().find(key);
+  if (spec && spec->kind == fem::KeyKind::integer) return defaults.integer(key);
   return defaults.number(key);
 }
 

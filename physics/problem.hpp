@@ -107,7 +107,7 @@ struct Problem {
 // Every key of a weld case.
 fem::ConfigSchema weld_case_schema();
 
-// The default of a number key of the weld case in internal units (e.g.
+// The default of a number or integer key of the weld case in internal units (e.g.
 // "solver.friction_penalty_ratio" -> 0.1): the default of a solver setting that
 // mirrors the key.
 double case_default(const std::string& key);

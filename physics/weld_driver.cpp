@@ -165,7 +165,7 @@ void WeldDriver::setup() {
 
   MechanicsSettings ms;
   ms.friction_coefficient = problem_.contact.friction_coefficient;
-  ms.penalty_factor = problem_.solver.contact_penalty_factor;
+  ms.contact_penalty_factor = problem_.solver.contact_penalty_factor;
   ms.contact_smoothing = problem_.solver.contact_smoothing;
   ms.friction_penalty_ratio = problem_.solver.friction_penalty_ratio;
   ms.residual_tolerance = problem_.solver.mechanics_tolerance;

@@ -388,7 +388,8 @@ TEST(InterfaceCoupling, ConductancesAreTheLawsAtThePairedPoints) {
     node_material.push_back(mesh.body_names[mesh.node_body[n]].find("electrode") != std::string::npos ? &copper
                                                                                                        : &steel);
   const fem::DofMap dofs(mesh, 1);
-  const contact::InterfaceCoupling layer(mesh, physics::interface_model(mesh, problem.contact), dofs, 2, 0.5e-3, "Test");
+  const contact::InterfaceCoupling layer(mesh, physics::interface_model(mesh, problem.contact), dofs, 2, 0.5e-3,
+                                         "Test");
   ASSERT_EQ(layer.size(), mesh.interfaces.size());
   std::size_t faces = 0;
   for (const auto& pairing : layer.pairings()) faces += pairing.n_slave_faces();
