@@ -84,12 +84,6 @@ double partly_bonded_conductance(double contact, double bonded, double degree) {
   return 1.0 / ((1 - degree) / contact + degree / bonded);
 }
 
-const InterfaceProperties& InterfaceModel::at(const std::string& name) const {
-  for (const auto& p : interfaces)
-    if (p.name == name) return p;
-  throw std::out_of_range("interface model has no interface '" + name + "'");
-}
-
 namespace {
 // The softer side's yield stress σ_y(0, T) at each side's own temperature, and its
 // slopes with respect to T_a and T_b (one of them is zero).

@@ -133,24 +133,13 @@ double partly_bonded_conductance(double contact, double bonded, double degree);
 // ---------------------------------------------------------------------------------
 // The laws with material properties evaluated at the interface temperature.
 
-// Parameters of one interface (in mesh.interfaces order in an InterfaceModel).
+// Parameters of one interface (of a FilmContactLaw, contact/film_contact_law.hpp).
 struct InterfaceProperties {
   std::string name;                // mesh interface
   double film_thickness = 0;       // m, t_f
   double coating_resistivity = 0;  // Ω·m, ρ_c
   double htc_p1 = 0;               // -, P1
   bool bonding = false;            // sheet/sheet: bonds when both sides pass the solidus
-};
-
-struct InterfaceModel {
-  std::vector<InterfaceProperties> interfaces;  // one per mesh interface, in map order
-  ThermalContactConstants thermal;
-  double closure_gap = 1e-6;                    // m, g_c of χ(g)
-  double bonded_factor = 1e3;                   // F of the bonded conductance
-  double bonding_band = 0;                      // K, Δ of bonding_degree (0: bond at the solidus)
-  double bonding_gap = 1e-6;                    // m, points farther apart do not bond (bonding_degree_at_gap)
-  // The entry of a named interface; throws std::out_of_range.
-  const InterfaceProperties& at(const std::string& name) const;
 };
 
 // A conductance with its derivatives with respect to the normal stress and to the

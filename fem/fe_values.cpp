@@ -137,4 +137,29 @@ void FaceValues::reinit(const Mesh& mesh, int cell, int face) {
   }
 }
 
+CellGeometry::CellGeometry(const Mesh& mesh, int n_gauss, CoordinateSystem coords)
+    : current_(mesh), n_gauss_(n_gauss), n_q_(n_gauss * n_gauss), coords_(coords) {
+  const std::size_t n_points = static_cast<std::size_t>(mesh.n_cells()) * n_q_;
+  JxW_.assign(n_points, 0.0);
+  grad_.assign(4 * n_points, Eigen::Vector2d::Zero());
+  CellValues cv(n_gauss, coords);
+  if (mesh.n_cells() > 0) cv.reinit(mesh, 0);
+  for (int q = 0; q < n_q_; ++q) shape_.push_back({cv.N(q, 0), cv.N(q, 1), cv.N(q, 2), cv.N(q, 3)});
+}
+
+void CellGeometry::update(const std::vector<Point>& positions) {
+  if (valid_ && positions == current_.nodes) return;
+  current_.nodes = positions;
+  CellValues cv(n_gauss_, coords_);
+  for (int e = 0; e < current_.n_cells(); ++e) {
+    cv.reinit(current_, e);
+    for (int q = 0; q < n_q_; ++q) {
+      const std::size_t k = static_cast<std::size_t>(e) * n_q_ + q;
+      JxW_[k] = cv.JxW(q);
+      for (int a = 0; a < 4; ++a) grad_[4 * k + a] = cv.grad_N(q, a);
+    }
+  }
+  valid_ = true;
+}
+
 }  // namespace rsw::fem

@@ -58,6 +58,32 @@ class CellValues {
   std::vector<double> JxW_;
 };
 
+// The Gauss-point geometry of every cell of a mesh for given node positions (a
+// deformed configuration): JxW and ∇N_a at each cell Gauss point, stored cell-major
+// (index k = cell · n_q + q; gradients at 4k + a), and N_a at the reference points.
+// update() recomputes them only when the positions differ from the last call's, so
+// solves on one configuration (the coupling iterations of a time step) share them.
+class CellGeometry {
+ public:
+  CellGeometry(const Mesh& mesh, int n_gauss, CoordinateSystem coords = CoordinateSystem::axisymmetric);
+  void update(const std::vector<Point>& positions);
+
+  int n_q() const { return n_q_; }
+  const Mesh& current() const { return current_; }  // the mesh at the last positions
+  const std::vector<double>& JxW() const { return JxW_; }
+  const std::vector<Eigen::Vector2d>& grad() const { return grad_; }
+  const std::vector<std::array<double, 4>>& shape() const { return shape_; }
+
+ private:
+  Mesh current_;
+  int n_gauss_, n_q_;
+  CoordinateSystem coords_;
+  bool valid_ = false;
+  std::vector<double> JxW_;
+  std::vector<Eigen::Vector2d> grad_;
+  std::vector<std::array<double, 4>> shape_;
+};
+
 // Values at the quadrature points of one face of a cell. Shape functions are those of
 // the whole cell (the two nodes off the face have N = 0 there).
 class FaceValues {

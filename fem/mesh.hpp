@@ -34,9 +34,12 @@ struct HangingNode {
 };
 
 // Two named boundaries that may touch: `first` and `second` are boundary names.
+// `kind` is a label the mesh builder sets to say which interface law applies there
+// (meshes/weld_mesh.hpp); fem gives it no meaning.
 struct InterfacePair {
   std::string first;
   std::string second;
+  std::string kind;
 };
 
 struct Mesh {

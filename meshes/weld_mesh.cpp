@@ -212,11 +212,13 @@ fem::Mesh weld_mesh(const StackGeometry& stack, const MeshSettings& settings) {
   }
   mesh.append(electrode_mesh(stack.lower, "lower_electrode", -top, -1, settings, boxes));
 
-  mesh.interfaces["es_upper"] = {"upper_electrode.contact_face", sheets.front().name + ".top"};
+  mesh.interfaces["es_upper"] = {"upper_electrode.contact_face", sheets.front().name + ".top",
+                                 interface_kind::electrode_sheet};
   for (std::size_t k = 0; k + 1 < sheets.size(); ++k)
-    mesh.interfaces["ss_" + std::to_string(k + 1) + "_" + std::to_string(k + 2)] = {sheets[k].name + ".bottom",
-                                                                                   sheets[k + 1].name + ".top"};
-  mesh.interfaces["es_lower"] = {"lower_electrode.contact_face", sheets.back().name + ".bottom"};
+    mesh.interfaces["ss_" + std::to_string(k + 1) + "_" + std::to_string(k + 2)] = {
+        sheets[k].name + ".bottom", sheets[k + 1].name + ".top", interface_kind::sheet_sheet};
+  mesh.interfaces["es_lower"] = {"lower_electrode.contact_face", sheets.back().name + ".bottom",
+                                 interface_kind::electrode_sheet};
   return mesh;
 }
 

@@ -29,8 +29,9 @@
 // (lower_electrode.contact_face, sheet_n.bottom). The first surface of a pair is the
 // slave side of contact (its quadrature points are projected onto the second), so
 // both electrode interfaces are discretised alike and a symmetric stack stays
-// symmetric. The mesh depends on geometry and
-// mesh settings only, never on model parameters.
+// symmetric. Each interface carries its kind (fem::InterfacePair::kind, below), which
+// selects its interface law; the names are for outputs only. The mesh depends on
+// geometry and mesh settings only, never on model parameters.
 #pragma once
 
 #include "fem/mesh.hpp"
@@ -39,6 +40,15 @@
 #include <vector>
 
 namespace rsw::meshes {
+
+// The kinds of interface of a weld mesh (fem::InterfacePair::kind): es_upper and
+// es_lower are electrode/sheet, ss_k_k+1 sheet/sheet. Each is also the name of the
+// weld case's section of that interface's parameters (contact.electrode_sheet,
+// contact.sheet_sheet; physics/interface_model.hpp).
+namespace interface_kind {
+inline constexpr char electrode_sheet[] = "electrode_sheet";
+inline constexpr char sheet_sheet[] = "sheet_sheet";
+}  // namespace interface_kind
 
 // Axial distance of the electrode surface from the face apex at radius r
 // (0 <= r <= cap radius): dome sagitta, then the cone flank.

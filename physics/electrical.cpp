@@ -1,6 +1,7 @@
 // Electrical conduction with contact interfaces; see electrical.hpp.
 #include "physics/electrical.hpp"
 
+#include "contact/interface_coupling.hpp"
 #include "fem/assembler.hpp"
 #include "fem/constraints.hpp"
 #include "fem/dof_map.hpp"
@@ -84,19 +85,16 @@ double ElectricalSolution::total_interface_power() const {
 
 struct Electrical::Impl {
   const fem::Mesh& mesh;
-  fem::Mesh current;  // the configuration of the last solve
   ElectricalSettings settings;
-  contact::InterfaceModel model;
   std::vector<const materials::Material*> body_material;
   std::vector<const materials::Material*> cell_material;
+  std::vector<const materials::Material*> node_material;
   int n_q;
 
   fem::DofMap dofs;
   int voltage_dof;
   fem::Constraints constraints;
-  std::vector<contact::InterfacePairing> pairings;  // the coupling pattern
-  std::vector<std::vector<double>> face_length;     // per pairing, per slave face (undeformed), m
-  std::vector<std::pair<int, int>> groups;          // (pairing, slave face)
+  contact::InterfaceCoupling interfaces;  // pairings (the coupling pattern), laws, coupling groups
   std::unique_ptr<fem::Assembler> assembler;
   // K changes little from one solve to the next (σ(T) and the contact conductances of
   // the next coupling iterate or step): a CHOLMOD factorisation of an earlier K
@@ -114,51 +112,35 @@ struct Electrical::Impl {
   const Eigen::VectorXd* temperature = nullptr;
   const contact::ContactState* contact = nullptr;
   // Gauss-point data (current configuration): σ of the last assembly, geometry.
-  std::vector<double> sigma, JxW;
-  std::vector<Eigen::Vector2d> grad;  // per cell Gauss point, 4 shape functions
-  std::vector<std::array<double, 4>> shape;  // N_a at the reference Gauss points
-  bool geometry_valid = false;
+  std::vector<double> sigma;
+  fem::CellGeometry geometry;
+  const std::vector<double>& JxW = geometry.JxW();
+  const std::vector<Eigen::Vector2d>& grad = geometry.grad();     // per cell Gauss point, 4 shape functions
+  const std::vector<std::array<double, 4>>& shape = geometry.shape();  // N_a at the reference Gauss points
 
   Impl(const fem::Mesh& m, std::vector<const materials::Material*> materials_of_body, contact::InterfaceModel mdl,
        const ElectricalSettings& s)
       : mesh(m),
-        current(m),
         settings(s),
-        model(std::move(mdl)),
         body_material(std::move(materials_of_body)),
         n_q(s.n_gauss * s.n_gauss),
         dofs(m, 1, 1),
         voltage_dof(dofs.extra_dof(0)),
-        constraints(dofs.n_dofs()) {
+        constraints(dofs.n_dofs()),
+        interfaces(m, std::move(mdl), dofs, s.n_gauss, s.search_margin, "Electrical"),
+        geometry(m, s.n_gauss) {
     if (s.n_gauss < 1 || s.n_gauss > 3) throw std::invalid_argument("Electrical: n_gauss must be 1, 2 or 3");
     if (static_cast<int>(body_material.size()) != mesh.n_bodies())
       throw std::invalid_argument("Electrical: one material per body expected");
-    if (model.interfaces.size() != mesh.interfaces.size())
-      throw std::invalid_argument("Electrical: the interface model must list every mesh interface");
     for (int e = 0; e < mesh.n_cells(); ++e) cell_material.push_back(body_material[mesh.cell_body[e]]);
+    for (int n = 0; n < mesh.n_nodes(); ++n) node_material.push_back(body_material[mesh.node_body[n]]);
 
     constraints.add_hanging_nodes(mesh, dofs);
     constraints.constrain_boundary(mesh, dofs, s.ground_boundary, 0, [](const fem::Point&) { return 0.0; });
     for (int n : mesh.boundary_nodes(s.current_boundary)) constraints.add_line(dofs.dof(n, 0), {{voltage_dof, 1.0}});
     constraints.close();
 
-    std::vector<std::vector<int>> dof_groups;
-    std::size_t k = 0;
-    for (const auto& [name, pair] : mesh.interfaces) {
-      if (model.interfaces[k++].name != name)
-        throw std::invalid_argument("Electrical: interface model out of order at '" + name + "'");
-      pairings.emplace_back(mesh, name, s.n_gauss, s.search_margin);
-      const auto& pairing = pairings.back();
-      face_length.push_back(contact::slave_face_lengths(mesh, pairing));
-      const int p = static_cast<int>(pairings.size()) - 1;
-      for (int f = 0; f < pairing.n_slave_faces(); ++f) {
-        groups.emplace_back(p, f);
-        std::vector<int> g;
-        for (int n : pairing.coupling_nodes(f)) g.push_back(dofs.dof(n, 0));
-        dof_groups.push_back(std::move(g));
-      }
-    }
-    assembler = std::make_unique<fem::Assembler>(mesh, dofs, constraints, dof_groups);
+    assembler = std::make_unique<fem::Assembler>(mesh, dofs, constraints, interfaces.dof_groups());
 
     ground_weight = Eigen::VectorXd::Zero(mesh.n_nodes());
     for (int n : mesh.boundary_nodes(s.ground_boundary)) ground_weight[n] = 1.0;
@@ -172,83 +154,19 @@ struct Electrical::Impl {
     ground_body = mesh.node_body[mesh.boundary_nodes(s.ground_boundary).front()];
     for (const auto& probe : s.probes) probes.push_back({locate_point(mesh, probe.upper), locate_point(mesh, probe.lower)});
 
-    const std::size_t n_points = static_cast<std::size_t>(mesh.n_cells()) * n_q;
-    sigma.assign(n_points, 0.0);
-    JxW.assign(n_points, 0.0);
-    grad.assign(4 * n_points, Eigen::Vector2d::Zero());
-    fem::CellValues cv(s.n_gauss);
-    cv.reinit(mesh, 0);
-    for (int q = 0; q < n_q; ++q) shape.push_back({cv.N(q, 0), cv.N(q, 1), cv.N(q, 2), cv.N(q, 3)});
-  }
-
-  void check_contact(const contact::ContactState& state) const {
-    if (!state.pairings || state.pairings->size() != pairings.size() || state.pressure.size() != pairings.size())
-      throw std::invalid_argument("Electrical: the contact state must hold one pairing and one pressure list per interface");
-    for (std::size_t p = 0; p < pairings.size(); ++p) {
-      const auto& given = (*state.pairings)[p];
-      const auto& own = pairings[p];
-      bool same = given.name() == own.name() && given.n_gauss() == own.n_gauss() &&
-                  given.n_slave_faces() == own.n_slave_faces() && state.pressure[p].size() == given.points().size();
-      for (int f = 0; same && f < own.n_slave_faces(); ++f) same = given.coupling_nodes(f) == own.coupling_nodes(f);
-      if (!same)
-        throw std::invalid_argument("Electrical: pairing '" + own.name() +
-                                    "' of the contact state differs from the solver's (n_gauss, search margin?)");
-    }
-  }
-
-  // Temperatures and materials of the two sides of a pairing point.
-  struct Sides {
-    double slave_temperature, master_temperature;
-    const materials::Material* slave;
-    const materials::Material* master;
-  };
-  Sides sides(const contact::ContactPoint& pt) const {
-    const Eigen::VectorXd& T = *temperature;
-    Sides s;
-    s.slave_temperature = pt.slave_weights[0] * T[pt.slave_nodes[0]] + pt.slave_weights[1] * T[pt.slave_nodes[1]];
-    s.master_temperature = pt.master_weights[0] * T[pt.master_nodes[0]] + pt.master_weights[1] * T[pt.master_nodes[1]];
-    s.slave = body_material[mesh.node_body[pt.slave_nodes[0]]];
-    s.master = body_material[mesh.node_body[pt.master_nodes[0]]];
-    return s;
+    sigma.assign(static_cast<std::size_t>(mesh.n_cells()) * n_q, 0.0);
   }
 
   // h_e at every pairing point (0 where unpaired, open or outside the pattern).
   void interface_conductances(const contact::BondingState& bonding, std::vector<std::vector<double>>& out) const {
-    out.resize(pairings.size());
-    for (std::size_t p = 0; p < pairings.size(); ++p) {
-      const auto& pairing = (*contact->pairings)[p];
-      const auto& props = model.interfaces[p];
-      out[p].assign(pairing.points().size(), 0.0);
-      for (std::size_t i = 0; i < pairing.points().size(); ++i) {
-        const auto& pt = pairing.points()[i];
-        if (!pt.paired || pairing.local_index(pt.slave_face, pt.master_nodes[0]) < 0 ||
-            pairing.local_index(pt.slave_face, pt.master_nodes[1]) < 0)
-          continue;
-        const Sides s = sides(pt);
-        const double beta = props.bonding ? bonding.degree(static_cast<int>(p), static_cast<int>(i)) : 0.0;
-        double h_contact = 0;
-        if (beta < 1 && contact->pressure[p][i] > 0)
-          h_contact = contact::electrical_contact_conductance(*s.slave, *s.master, contact->pressure[p][i],
-                                                              s.slave_temperature, s.master_temperature, props)
-                          .value;
-        out[p][i] = beta > 0 ? contact::partly_bonded_conductance(
-                                   h_contact,
-                                   contact::bonded_electrical_conductance(*s.slave, *s.master, s.slave_temperature,
-                                                                          s.master_temperature,
-                                                                          face_length[p][pt.slave_face],
-                                                                          model.bonded_factor)
-                                       .value,
-                                   beta)
-                             : h_contact;
-      }
-    }
+    interfaces.conductances(contact::InterfaceField::electrical, *contact, bonding, *temperature, node_material, out);
   }
 
   // Every body must reach the ground body through conducting interface points.
   void check_current_path(const std::vector<std::vector<double>>& h) const {
     std::vector<int> parent(mesh.n_bodies());
     std::iota(parent.begin(), parent.end(), 0);
-    for (std::size_t p = 0; p < pairings.size(); ++p) {
+    for (std::size_t p = 0; p < interfaces.size(); ++p) {
       const auto& points = (*contact->pairings)[p].points();
       for (std::size_t i = 0; i < points.size(); ++i)
         if (h[p][i] > 0) {
@@ -262,23 +180,6 @@ struct Electrical::Impl {
       if (find_root(parent, b) != ground)
         throw std::runtime_error("Electrical: body '" + mesh.body_names[b] +
                                  "' has no conducting path to the ground face (no closed contact)");
-  }
-
-  // Gauss-point geometry (∇N, JxW) of every cell for the node positions; kept while
-  // the positions do not change (the coupling iterations of one step).
-  void update_geometry(const std::vector<fem::Point>& positions) {
-    if (geometry_valid && positions == current.nodes) return;
-    current.nodes = positions;
-    fem::CellValues cv(settings.n_gauss);
-    for (int e = 0; e < mesh.n_cells(); ++e) {
-      cv.reinit(current, e);
-      for (int q = 0; q < n_q; ++q) {
-        const std::size_t k = static_cast<std::size_t>(e) * n_q + q;
-        JxW[k] = cv.JxW(q);
-        for (int a = 0; a < 4; ++a) grad[4 * k + a] = cv.grad_N(q, a);
-      }
-    }
-    geometry_valid = true;
   }
 
   // ∫ σ ∇N_a·∇N_b dV with σ = 1/ρ_e(T) at each Gauss point.
@@ -304,18 +205,16 @@ struct Electrical::Impl {
 
   // Σ_points h_e A (v_s − v_m)(φ_s − φ_m) over the points of one slave face.
   void group_kernel(int g, const std::vector<std::vector<double>>& h, fem::LocalSystem& local) const {
-    const auto [p, f] = groups[g];
+    const auto [p, f] = interfaces.groups()[g];
     const auto& pairing = (*contact->pairings)[p];
     for (int k = 0; k < pairing.n_gauss(); ++k) {
       const int i = f * pairing.n_gauss() + k;
       if (h[p][i] == 0) continue;
       const auto& pt = pairing.points()[i];
       // The point's four nodes (two slave, two master) and their jump weights φ_s − φ_m.
-      const std::array<int, 4> node{pairing.local_index(f, pt.slave_nodes[0]), pairing.local_index(f, pt.slave_nodes[1]),
-                                    pairing.local_index(f, pt.master_nodes[0]),
-                                    pairing.local_index(f, pt.master_nodes[1])};
-      const std::array<double, 4> jump{pt.slave_weights[0], pt.slave_weights[1], -pt.master_weights[0],
-                                       -pt.master_weights[1]};
+      const contact::PointStencil stencil = contact::point_stencil(pairing, f, pt);
+      const std::array<int, 4>& node = stencil.node;
+      const std::array<double, 4>& jump = stencil.jump;
       const double c = h[p][i] * pt.area;
       for (int a = 0; a < 4; ++a)
         for (int b = 0; b < 4; ++b) local.matrix(node[a], node[b]) += c * jump[a] * jump[b];
@@ -340,8 +239,8 @@ const ElectricalSolution& Electrical::solve(const std::vector<fem::Point>& posit
   const fem::Mesh& mesh = m.mesh;
   if (static_cast<int>(positions.size()) != mesh.n_nodes() || nodal_temperature.size() != mesh.n_nodes())
     throw std::invalid_argument("Electrical: positions and temperatures must have one entry per node");
-  m.check_contact(contact);
-  m.update_geometry(positions);
+  m.interfaces.check(contact);
+  m.geometry.update(positions);
   m.temperature = &nodal_temperature;
   m.contact = &contact;
   ElectricalSolution& sol = solution_;
@@ -400,7 +299,7 @@ const ElectricalSolution& Electrical::solve(const std::vector<fem::Point>& posit
   }
 
   // Interfaces: current slave → master and Joule heat h_e Δφ².
-  const std::size_t n_interfaces = m.pairings.size();
+  const std::size_t n_interfaces = m.interfaces.size();
   sol.interface_heat.resize(n_interfaces);
   sol.interface_current.assign(n_interfaces, 0.0);
   sol.interface_power.assign(n_interfaces, 0.0);
@@ -411,9 +310,7 @@ const ElectricalSolution& Electrical::solve(const std::vector<fem::Point>& posit
       const double h = sol.interface_conductance[p][i];
       if (h == 0) continue;
       const auto& pt = points[i];
-      const double jump = pt.slave_weights[0] * phi[pt.slave_nodes[0]] + pt.slave_weights[1] * phi[pt.slave_nodes[1]] -
-                          pt.master_weights[0] * phi[pt.master_nodes[0]] -
-                          pt.master_weights[1] * phi[pt.master_nodes[1]];
+      const double jump = contact::jump(pt, phi);
       sol.interface_heat[p][i] = contact::interface_joule_heat(h, jump).value;
       sol.interface_current[p] += h * jump * pt.area;
       sol.interface_power[p] += sol.interface_heat[p][i] * pt.area;
@@ -488,32 +385,6 @@ contact::ContactState contact_state(const Mechanics& mechanics) {
   for (std::size_t p = 0; p < mechanics.pairings().size(); ++p)
     state.pressure.push_back(mechanics.contact_pressure(static_cast<int>(p)));
   return state;
-}
-
-contact::InterfaceModel interface_model(const fem::Mesh& mesh, const ContactParameters& parameters) {
-  contact::InterfaceModel model;
-  model.thermal = {parameters.htc_p2, parameters.htc_p3, parameters.htc_p4};
-  model.bonding_band = parameters.bonding_band;
-  model.bonding_gap = parameters.bonding_gap;
-  for (const auto& [name, pair] : mesh.interfaces) {
-    contact::InterfaceProperties props;
-    props.name = name;
-    const InterfaceContact* source = nullptr;
-    if (name.rfind("es_", 0) == 0) {
-      source = &parameters.electrode_sheet;
-    } else if (name.rfind("ss_", 0) == 0) {
-      source = &parameters.sheet_sheet;
-      props.bonding = true;
-    } else {
-      throw std::invalid_argument("interface '" + name +
-                                  "' is neither electrode/sheet ('es_*') nor sheet/sheet ('ss_*')");
-    }
-    props.film_thickness = source->film_thickness;
-    props.coating_resistivity = source->coating_resistivity;
-    props.htc_p1 = source->htc_p1;
-    model.interfaces.push_back(props);
-  }
-  return model;
 }
 
 }  // namespace rsw::physics

@@ -9,12 +9,13 @@
 // - the lower electrode's end face is at φ = 0;
 // - every other outer surface is insulated (natural condition);
 // - hanging nodes are constrained to their coarse edges.
-// Interfaces (contact/interface_laws.hpp): at every paired point of an interface with
-// contact pressure p > 0, or bonded, the normal current density
+// Interfaces (the interface layer contact/interface_coupling.hpp): at every paired
+// point the normal current density
 //     j = h_e (φ_slave − φ_master)   (A/m²)
-// with h_e from Bay–Wanheim (paper eq. 1) at the point's pressure and interface
-// temperature, or the bonded conductance. Each slave face is one coupling group over
-// the same coupling nodes as the mechanics pairing. Weak form:
+// with h_e from the interface's law (contact/interface_law.hpp; for the weld
+// Bay–Wanheim, paper eq. 1, where the contact pressure p > 0, or the bonded
+// conductance). Each slave face is one coupling group over the same coupling nodes as
+// the mechanics pairing. Weak form:
 //     Σ_cells ∫ σ ∇φ·∇v dV + Σ_points h_e (φ_s − φ_m)(v_s − v_m) A = I v(V)
 // The system is linear and symmetric positive definite for a given T and contact
 // state: one CHOLMOD factorisation per solve, the symbolic analysis reused; the
@@ -38,6 +39,7 @@
 // (uniform rod, two-block contact).
 #pragma once
 
+#include "contact/interface_law.hpp"
 #include "contact/interface_laws.hpp"
 #include "contact/interface_pairing.hpp"
 #include "fem/mesh.hpp"
@@ -130,11 +132,5 @@ class Electrical {
 // The contact state of the mechanics solver after its last step: its pairings and
 // the normal stress at their points.
 contact::ContactState contact_state(const Mechanics& mechanics);
-
-// One InterfaceProperties per mesh interface, from the case: interfaces named "es_*"
-// take the electrode/sheet parameters, "ss_*" the sheet/sheet ones and may bond
-// (meshes/weld_mesh.hpp naming); P2–P4 from the case. Throws std::invalid_argument
-// for any other interface name.
-contact::InterfaceModel interface_model(const fem::Mesh& mesh, const ContactParameters& parameters);
 
 }  // namespace rsw::physics

@@ -36,11 +36,14 @@
 
 namespace rsw::physics {
 
+// The first three mirror solver.coupling_acceleration_depth, solver.coupling_tolerance
+// and solver.max_coupling_iterations and take their defaults from the schema.
 struct CouplingSettings {
-  int acceleration_depth = 5;      // Anderson depth (0: plain iteration, no depth retries)
-  double tolerance = 1e-2;         // K, on the change of an iterate
-  int max_iterations = 50;         // per attempt
-  double thermal_tolerance = 1e-6; // K, of the converged thermal solve
+  // Anderson depth (0: plain iteration, no depth retries)
+  int acceleration_depth = static_cast<int>(case_default("solver.coupling_acceleration_depth"));
+  double tolerance = case_default("solver.coupling_tolerance");  // K, on the change of an iterate
+  int max_iterations = static_cast<int>(case_default("solver.max_coupling_iterations"));  // per attempt
+  double thermal_tolerance = 1e-6;  // K, of the converged thermal solve
 };
 
 struct CoupledStepReport {

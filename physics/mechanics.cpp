@@ -202,7 +202,7 @@ struct Mechanics::Impl {
           auto n = mesh.face_nodes(f);
           h = std::min(h, (mesh.nodes[n[1]] - mesh.nodes[n[0]]).norm());
         }
-      normal_penalty.push_back(s.penalty_factor * E / h);
+      normal_penalty.push_back(s.contact_penalty_factor * E / h);
       area_weight.push_back(two_pass(name) ? 0.5 : 1.0);
     }
     for (std::size_t p = 0; p < pairings.size(); ++p) {
@@ -633,7 +633,7 @@ struct Mechanics::Impl {
   void contact_point(int p, int idx, double share, const PointDofs& point_dofs, fem::LocalSystem& local) {
     const auto& pt = pass(p).points()[idx];
     const double eps_n = normal_penalty[p];
-    const double eps_t = settings.tangential_penalty_ratio * eps_n;
+    const double eps_t = settings.friction_penalty_ratio * eps_n;
     const double mu = settings.friction_coefficient;
     // Nv, Tv: the gap and slip operators (g' = Nvᵀ u', slip' = Tvᵀ u' at fixed geometry).
     Vector8 Nv, Tv, du;

@@ -27,7 +27,7 @@
 // Contact (per interface, Gauss-point-to-segment, contact/interface_pairing): normal
 // pressure from a C¹ penalty law
 //   p = 0 (g >= 0),  ε_N g²/(2δ) (-δ < g < 0),  ε_N (-g - δ/2) (g <= -δ),
-// with ε_N = penalty_factor · E/h (E the stiffer side's room-temperature modulus, h
+// with ε_N = contact_penalty_factor · E/h (E the stiffer side's room-temperature modulus, h
 // the finest interface cell) and δ = contact_smoothing. The quadratic start keeps
 // the residual differentiable when a point enters contact, so Newton converges
 // quadratically instead of cycling between active sets, and contact outputs vary
@@ -44,11 +44,12 @@
 // trial traction τ_trial = τ_n + ε_T Δs (Δs the tangential slip increment of the
 // slave point relative to the master, τ_n the committed history): stick with
 // stiffness ε_T at small traction, sliding as |τ| → μ p, and no switch between the
-// two, so the tangent stays continuous. ε_T = 0.1 ε_N by default: the elastic slip
-// before sliding, μp/ε_T, is about 40 nm at μp = 150 MPa on the paper's mesh (Abaqus/
-// Standard's default penalty friction allows 0.5 % of a contact face's length, 0.3 µm
-// there). ε_T = ε_N (4 nm) gave the same weld to 0.2 % with 35 % more Newton
-// iterations, spent on points switching between stick and slip. Points where the
+// two, so the tangent stays continuous. ε_T = 0.1 ε_N by default
+// (solver.friction_penalty_ratio): the elastic slip before sliding, μp/ε_T, is about
+// 40 nm at μp = 150 MPa on the paper's mesh (Abaqus/Standard's default penalty
+// friction allows 0.5 % of a contact face's length, 0.3 µm there). ε_T = ε_N (4 nm)
+// gave the same weld to 0.2 % with 35 % more Newton iterations, spent on points
+// switching between stick and slip. Points where the
 // sheets have fused (set_bonded) are tied instead.
 #pragma once
 
@@ -60,6 +61,7 @@
 #include "fem/mesh.hpp"
 #include "materials/j2_plasticity.hpp"
 #include "materials/material.hpp"
+#include "physics/problem.hpp"
 
 #include <Eigen/Core>
 
@@ -69,11 +71,14 @@
 
 namespace rsw::physics {
 
+// The settings that mirror a key of the weld case (named in their comment) take its
+// default from the schema (physics/problem.hpp); the weld driver sets them from the case.
 struct MechanicsSettings {
-  double friction_coefficient = 0.3;      // μ; 0 = frictionless
-  double penalty_factor = 10.0;           // ε_N = factor · E / h
-  double tangential_penalty_ratio = 0.1;  // ε_T = ratio · ε_N (elastic slip before sliding μp/ε_T)
-  double contact_smoothing = 1e-6;        // m, δ of the C¹ penalty law (see below)
+  double friction_coefficient = case_default("contact.friction_coefficient");  // μ; 0 = frictionless
+  double contact_penalty_factor = case_default("solver.contact_penalty_factor");  // ε_N = factor · E / h
+  // ε_T = ratio · ε_N (elastic slip before sliding μp/ε_T)
+  double friction_penalty_ratio = case_default("solver.friction_penalty_ratio");
+  double contact_smoothing = case_default("solver.contact_smoothing");  // m, δ of the C¹ penalty law (see below)
   // Interfaces treated in two passes (docs/MECHANICS.md, "Contact"): besides the
   // named slave/master pass, a mirrored pass with the roles swapped, each pass with
   // half the area weight, so that two sides of the same kind are loaded alike.

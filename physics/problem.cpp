@@ -470,6 +470,13 @@ ConfigSchema weld_case_schema() {
   return schema;
 }
 
+double case_default(const std::string& key) {
+  static const Config defaults(weld_case_schema());
+  const fem::KeySpec* spec = defaults.schema().find(key);
+  if (spec && spec->kind == fem::KeyKind::integer) return defaults.integer(key);
+  return defaults.number(key);
+}
+
 Problem make_problem(const Config& config) {
   Problem problem;
   problem.name = config.text("case.name");

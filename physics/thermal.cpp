@@ -1,6 +1,7 @@
 // Transient heat conduction in enthalpy form with contact interfaces; see thermal.hpp.
 #include "physics/thermal.hpp"
 
+#include "contact/interface_coupling.hpp"
 #include "fem/assembler.hpp"
 #include "fem/constraints.hpp"
 #include "fem/dof_map.hpp"
@@ -49,9 +50,7 @@ ThermalSettings thermal_settings(const ThermalParameters& p) {
 
 struct Thermal::Impl {
   const fem::Mesh& mesh;
-  fem::Mesh current;  // configuration of the last solve
   ThermalSettings settings;
-  contact::InterfaceModel model;
   std::vector<const materials::Material*> body_material;
   std::vector<const materials::Material*> cell_material;
   std::vector<char> melt_switch_cell;  // the cell's body switches to λ_m
@@ -60,9 +59,9 @@ struct Thermal::Impl {
 
   fem::DofMap dofs;
   fem::Constraints constraints;
-  std::vector<contact::InterfacePairing> pairings;  // the coupling pattern
-  std::vector<std::vector<double>> face_length;
-  std::vector<std::pair<int, int>> groups;
+  contact::InterfaceCoupling interfaces;  // pairings (the coupling pattern), laws, coupling groups
+  const std::vector<contact::InterfacePairing>& pairings = interfaces.pairings();
+  const std::vector<std::pair<int, int>>& groups = interfaces.groups();  // (pairing, slave face)
   std::unique_ptr<fem::Assembler> assembler;
   bool implicit_blend;  // the λ_m blend weight follows the Newton iterate (settings)
   fem::LinearSolver solver;
@@ -88,10 +87,11 @@ struct Thermal::Impl {
   bool start_given = false;            // set_start() before the next solve
   contact::BondingState bonding, trial_bonding;
   std::vector<std::vector<double>> conductance;  // per pairing point, last evaluation
-  std::vector<double> JxW;                       // per cell Gauss point, current configuration
-  std::vector<Eigen::Vector2d> grad;             // ∇N_a per cell Gauss point
-  std::vector<std::array<double, 4>> shape;      // N_a at the reference Gauss points
-  bool geometry_valid = false;
+  fem::CellGeometry geometry;                    // of the configuration of the last solve
+  const fem::Mesh& current = geometry.current();
+  const std::vector<double>& JxW = geometry.JxW();                     // per cell Gauss point
+  const std::vector<Eigen::Vector2d>& grad = geometry.grad();          // ∇N_a per cell Gauss point
+  const std::vector<std::array<double, 4>>& shape = geometry.shape();  // N_a at the reference Gauss points
   bool need_matrix = true;                       // kernels compute ∂R/∂T too
   bool factorized = false;                       // the solver holds a factorisation of this step
   long n_solves = 0, n_factorizations = 0;       // summed over the run (solver_counts)
@@ -106,15 +106,15 @@ struct Thermal::Impl {
   Impl(const fem::Mesh& m, std::vector<const materials::Material*> materials_of_body, contact::InterfaceModel mdl,
        const ThermalSettings& s)
       : mesh(m),
-        current(m),
         settings(s),
-        model(std::move(mdl)),
         body_material(std::move(materials_of_body)),
         n_q(s.n_gauss * s.n_gauss),
         dofs(m, 1),
         constraints(dofs.n_dofs()),
+        interfaces(m, std::move(mdl), dofs, s.n_gauss, s.search_margin, "Thermal"),
         implicit_blend(s.melt_conductivity > 0 && s.melt_smoothing > 0 && s.implicit_melt_blend),
-        solver(implicit_blend ? fem::SolverKind::klu : fem::SolverKind::cholmod) {
+        solver(implicit_blend ? fem::SolverKind::klu : fem::SolverKind::cholmod),
+        geometry(m, s.n_gauss) {
     // The unsymmetric tangent (λ_m blend) is factorised by KLU, which refactorises each
     // new tangent of the fixed pattern with the pivot sequence of the last pivoted
     // factorisation (fem::LinearSolver; test
@@ -127,8 +127,6 @@ struct Thermal::Impl {
     if (s.n_gauss < 1 || s.n_gauss > 3) throw std::invalid_argument("Thermal: n_gauss must be 1, 2 or 3");
     if (static_cast<int>(body_material.size()) != mesh.n_bodies())
       throw std::invalid_argument("Thermal: one material per body expected");
-    if (model.interfaces.size() != mesh.interfaces.size())
-      throw std::invalid_argument("Thermal: the interface model must list every mesh interface");
     for (int e = 0; e < mesh.n_cells(); ++e) {
       const int b = mesh.cell_body[e];
       cell_material.push_back(body_material[b]);
@@ -143,24 +141,8 @@ struct Thermal::Impl {
     }
     constraints.close();
 
-    std::vector<std::vector<int>> dof_groups;
-    std::size_t k = 0;
-    for (const auto& [name, pair] : mesh.interfaces) {
-      if (model.interfaces[k++].name != name)
-        throw std::invalid_argument("Thermal: interface model out of order at '" + name + "'");
-      pairings.emplace_back(mesh, name, s.n_gauss, s.search_margin);
-      const auto& pairing = pairings.back();
-      face_length.push_back(contact::slave_face_lengths(mesh, pairing));
-      const int p = static_cast<int>(pairings.size()) - 1;
-      for (int f = 0; f < pairing.n_slave_faces(); ++f) {
-        groups.emplace_back(p, f);
-        std::vector<int> g;
-        for (int n : pairing.coupling_nodes(f)) g.push_back(dofs.dof(n, 0));
-        dof_groups.push_back(std::move(g));
-      }
-      conductance.emplace_back(pairing.points().size(), 0.0);
-    }
-    assembler = std::make_unique<fem::Assembler>(mesh, dofs, constraints, dof_groups);
+    for (const auto& pairing : pairings) conductance.emplace_back(pairing.points().size(), 0.0);
+    assembler = std::make_unique<fem::Assembler>(mesh, dofs, constraints, interfaces.dof_groups());
     bonding = contact::BondingState(pairings);
     trial_bonding = bonding;
 
@@ -196,9 +178,6 @@ struct Thermal::Impl {
     melt_state.assign(static_cast<std::size_t>(mesh.n_cells()) * n_q, 0);
     conductivity_q.assign(melt_state.size(), 0.0);
     table_conductivity_q.assign(melt_state.size(), 0.0);
-    JxW.assign(melt_state.size(), 0.0);
-    grad.assign(4 * melt_state.size(), Eigen::Vector2d::Zero());
-    for (int q = 0; q < n_q; ++q) shape.push_back({cv.N(q, 0), cv.N(q, 1), cv.N(q, 2), cv.N(q, 3)});
     set_temperature(Eigen::VectorXd::Constant(mesh.n_nodes(), s.initial_temperature));
   }
 
@@ -215,24 +194,25 @@ struct Thermal::Impl {
 
   void check_inputs(const contact::ContactState& state, const std::vector<double>& q_v,
                     const std::vector<std::vector<double>>& q_s) const {
-    if (!state.pairings || state.pairings->size() != pairings.size() || state.pressure.size() != pairings.size())
-      throw std::invalid_argument("Thermal: the contact state must hold one pairing and one pressure list per interface");
-    for (std::size_t p = 0; p < pairings.size(); ++p) {
-      const auto& given = (*state.pairings)[p];
-      const auto& own = pairings[p];
-      bool same = given.name() == own.name() && given.n_gauss() == own.n_gauss() &&
-                  given.n_slave_faces() == own.n_slave_faces() && state.pressure[p].size() == given.points().size();
-      for (int f = 0; same && f < own.n_slave_faces(); ++f) same = given.coupling_nodes(f) == own.coupling_nodes(f);
-      if (!same)
-        throw std::invalid_argument("Thermal: pairing '" + own.name() +
-                                    "' of the contact state differs from the solver's (n_gauss, search margin?)");
-      if (!q_s.empty() && q_s[p].size() != given.points().size())
-        throw std::invalid_argument("Thermal: interface heat of '" + own.name() + "' has the wrong size");
-    }
+    interfaces.check(state);
+    for (std::size_t p = 0; p < pairings.size(); ++p)
+      if (!q_s.empty() && q_s[p].size() != (*state.pairings)[p].points().size())
+        throw std::invalid_argument("Thermal: interface heat of '" + pairings[p].name() + "' has the wrong size");
     if (!q_v.empty() && q_v.size() != melt_state.size())
       throw std::invalid_argument("Thermal: bulk Joule heat must have one value per cell Gauss point");
     if (!q_s.empty() && q_s.size() != pairings.size())
       throw std::invalid_argument("Thermal: interface heat must have one list per interface");
+  }
+
+  // The inputs of a solve (checked) and the Gauss-point geometry of its configuration.
+  void set_inputs(double step, const std::vector<fem::Point>& positions, const contact::ContactState& state,
+                  const std::vector<double>& q_v, const std::vector<std::vector<double>>& q_s) {
+    check_inputs(state, q_v, q_s);
+    geometry.update(positions);
+    dt = step;
+    contact = &state;
+    joule = &q_v;
+    interface_heat = &q_s;
   }
 
   // The λ_m switch states of paper eq. 3 for the step, at the field T (the step's
@@ -275,23 +255,6 @@ struct Thermal::Impl {
         }
       }
     }
-  }
-
-  // Gauss-point geometry (∇N, JxW) of every cell for the node positions; kept while
-  // the positions do not change (the coupling iterations of one step).
-  void update_geometry(const std::vector<fem::Point>& positions) {
-    if (geometry_valid && positions == current.nodes) return;
-    current.nodes = positions;
-    fem::CellValues cv(settings.n_gauss);
-    for (int e = 0; e < mesh.n_cells(); ++e) {
-      cv.reinit(current, e);
-      for (int q = 0; q < n_q; ++q) {
-        const std::size_t k = static_cast<std::size_t>(e) * n_q + q;
-        JxW[k] = cv.JxW(q);
-        for (int a = 0; a < 4; ++a) grad[4 * k + a] = cv.grad_N(q, a);
-      }
-    }
-    geometry_valid = true;
   }
 
   // Capacity, conduction and bulk source of one cell; local.vector = −R_e, matrix = ∂R_e/∂T.
@@ -382,38 +345,7 @@ struct Thermal::Impl {
   // falls to the strength floor) and the table kinks of σ_d and k would make Newton
   // cycle; like σ(T) of the electrical field it is updated by the staggered coupling.
   void interface_conductances() {
-    for (std::size_t p = 0; p < pairings.size(); ++p) {
-      const auto& pairing = (*contact->pairings)[p];
-      const auto& props = model.interfaces[p];
-      for (std::size_t i = 0; i < pairing.points().size(); ++i) {
-        const auto& pt = pairing.points()[i];
-        double& h = conductance[p][i];
-        h = 0;
-        if (!pt.paired || pairing.local_index(pt.slave_face, pt.master_nodes[0]) < 0 ||
-            pairing.local_index(pt.slave_face, pt.master_nodes[1]) < 0)
-          continue;
-        const double T_s = pt.slave_weights[0] * T[pt.slave_nodes[0]] + pt.slave_weights[1] * T[pt.slave_nodes[1]];
-        const double T_m = pt.master_weights[0] * T[pt.master_nodes[0]] + pt.master_weights[1] * T[pt.master_nodes[1]];
-        const materials::Material& mat_s = *node_material[pt.slave_nodes[0]];
-        const materials::Material& mat_m = *node_material[pt.master_nodes[0]];
-        const double beta = props.bonding ? bonding.degree(static_cast<int>(p), static_cast<int>(i)) : 0.0;
-        double h_contact = 0;
-        if (beta < 1) {
-          const double chi = contact::closure_factor(pt.gap, model.closure_gap).value;
-          if (chi > 0)
-            h_contact = chi * contact::thermal_contact_conductance(mat_s, mat_m, contact->pressure[p][i], T_s, T_m,
-                                                                   props, model.thermal)
-                                  .value;
-        }
-        h = beta > 0 ? contact::partly_bonded_conductance(
-                           h_contact,
-                           contact::bonded_thermal_conductance(mat_s, mat_m, T_s, T_m, face_length[p][pt.slave_face],
-                                                               model.bonded_factor)
-                               .value,
-                           beta)
-                     : h_contact;
-      }
-    }
+    interfaces.conductances(contact::InterfaceField::thermal, *contact, bonding, T, node_material, conductance);
   }
 
   // Thermal contact and interface heat at the points of one slave face:
@@ -427,18 +359,16 @@ struct Thermal::Impl {
       const double h = conductance[p][i];
       const double q_s = interface_heat->empty() ? 0.0 : (*interface_heat)[p][i];
       if (!pt.paired || (h == 0 && q_s == 0)) continue;
-      const int lm0 = pairing.local_index(f, pt.master_nodes[0]), lm1 = pairing.local_index(f, pt.master_nodes[1]);
-      if (lm0 < 0 || lm1 < 0) continue;  // outside the pattern: no coupling
       // The point's four nodes (two slave, two master): local index, jump weight
       // (T_s − T_m) and weight of the half/half split of q_s.
-      const std::array<int, 4> node{pairing.local_index(f, pt.slave_nodes[0]), pairing.local_index(f, pt.slave_nodes[1]),
-                                    lm0, lm1};
-      const std::array<double, 4> jump{pt.slave_weights[0], pt.slave_weights[1], -pt.master_weights[0],
-                                       -pt.master_weights[1]};
+      const contact::PointStencil stencil = contact::point_stencil(pairing, f, pt);
+      if (!stencil.in_pattern()) continue;  // outside the pattern: no coupling
+      const std::array<int, 4>& node = stencil.node;
+      const std::array<double, 4>& jump = stencil.jump;
       const std::array<double, 4> mean{0.5 * pt.slave_weights[0], 0.5 * pt.slave_weights[1],
                                        0.5 * pt.master_weights[0], 0.5 * pt.master_weights[1]};
-      const double T_s = pt.slave_weights[0] * T[pt.slave_nodes[0]] + pt.slave_weights[1] * T[pt.slave_nodes[1]];
-      const double T_m = pt.master_weights[0] * T[pt.master_nodes[0]] + pt.master_weights[1] * T[pt.master_nodes[1]];
+      const double T_s = contact::slave_value(pt, T);
+      const double T_m = contact::master_value(pt, T);
       const double A = pt.area;
       for (int a = 0; a < 4; ++a) {
         local.vector[node[a]] -= h * (T_s - T_m) * A * jump[a] - q_s * A * mean[a];
@@ -546,17 +476,13 @@ struct Thermal::Impl {
   void update_bonding() {
     trial_bonding = bonding;
     for (std::size_t p = 0; p < pairings.size(); ++p) {
-      if (!model.interfaces[p].bonding) continue;
+      const contact::InterfaceLaw& law = interfaces.law(p);
+      if (!law.bonds()) continue;
       const auto& points = (*contact->pairings)[p].points();
       for (std::size_t i = 0; i < points.size(); ++i) {
-        const auto& pt = points[i];
-        if (!pt.paired || trial_bonding.bonded(static_cast<int>(p), static_cast<int>(i))) continue;
-        const double T_s = pt.slave_weights[0] * T[pt.slave_nodes[0]] + pt.slave_weights[1] * T[pt.slave_nodes[1]];
-        const double T_m = pt.master_weights[0] * T[pt.master_nodes[0]] + pt.master_weights[1] * T[pt.master_nodes[1]];
+        if (!points[i].paired || trial_bonding.bonded(static_cast<int>(p), static_cast<int>(i))) continue;
         trial_bonding.raise(static_cast<int>(p), static_cast<int>(i),
-                            contact::bonding_degree_at_gap(T_s, node_material[pt.slave_nodes[0]]->solidus(), T_m,
-                                                           node_material[pt.master_nodes[0]]->solidus(),
-                                                           model.bonding_band, pt.gap, model.bonding_gap));
+                            law.bonding_degree(interfaces.point(*contact, bonding, p, i, T, node_material)));
       }
     }
   }
@@ -581,12 +507,7 @@ ThermalStepReport Thermal::solve(double dt, const std::vector<fem::Point>& posit
   if (!(dt > 0)) throw std::invalid_argument("Thermal: the time step must be positive");
   if (static_cast<int>(positions.size()) != m.mesh.n_nodes())
     throw std::invalid_argument("Thermal: one position per node expected");
-  m.check_inputs(contact, joule_heat, interface_heat);
-  m.update_geometry(positions);
-  m.dt = dt;
-  m.contact = &contact;
-  m.joule = &joule_heat;
-  m.interface_heat = &interface_heat;
+  m.set_inputs(dt, positions, contact, joule_heat, interface_heat);
   // A new step factorises afresh; further calls of the step (staggered coupling)
   // start from the step's last factorisation.
   bool refactor = m.new_step || !m.factorized;
@@ -741,12 +662,7 @@ void Thermal::residual_and_tangent(double dt, const std::vector<fem::Point>& pos
                                    const Eigen::VectorXd& reference, const Eigen::VectorXd& reduced,
                                    Eigen::VectorXd& residual, Eigen::SparseMatrix<double>& tangent) {
   Impl& m = *impl_;
-  m.check_inputs(contact, joule_heat, interface_heat);
-  m.update_geometry(positions);
-  m.dt = dt;
-  m.contact = &contact;
-  m.joule = &joule_heat;
-  m.interface_heat = &interface_heat;
+  m.set_inputs(dt, positions, contact, joule_heat, interface_heat);
   // The solver's state is left as it was.
   const Eigen::VectorXd saved_T = m.T;
   const std::vector<char> saved_states = m.melt_state;

@@ -57,9 +57,11 @@
 // - Sources: bulk Joule heat q_v (W/m³) at the cell Gauss points and interface Joule
 //   heat q_s (W/m²) at the pairing points, both from physics::Electrical; q_s is
 //   released half on each side, distributed with the side's interpolation weights.
-// - Interfaces: at every paired point the flux h (T_s − T_m) with h = HTC(F_n, T_s, T_m)
-//   χ(g) (paper eq. 2 times the C¹ closure factor, contact/interface_laws.hpp), or
-//   the bonded conductance at bonded S/S points (perfect thermal contact).
+// - Interfaces (the interface layer contact/interface_coupling.hpp, shared with the
+//   electrical field): at every paired point the flux h (T_s − T_m) with h from the
+//   interface's law (contact/interface_law.hpp; for the weld HTC(F_n, T_s, T_m) χ(g),
+//   paper eq. 2 times the C¹ closure factor, or the bonded conductance at bonded S/S
+//   points, perfect thermal contact).
 // - Boundaries: water cooling q = h_w (T − T_w) on every "*.cooling_bore"; air
 //   q = h_air (T − T_amb) on every other named outer boundary except the axis
 //   ("*.axis", symmetry) and the electrode end faces ("*.end_face", adiabatic: the
@@ -83,6 +85,7 @@
 // 875–898 (fixed-grid enthalpy with nodal lumping).
 #pragma once
 
+#include "contact/interface_law.hpp"
 #include "contact/interface_laws.hpp"
 #include "fem/mesh.hpp"
 #include "materials/material.hpp"
@@ -101,11 +104,12 @@ namespace rsw::physics {
 struct ThermalSettings {
   int n_gauss = 2;                    // per direction; must match the electrical solver's
   double search_margin = 0.5e-3;      // m, of the pairings (must equal the mechanics')
-  double initial_temperature = 20.0;  // °C
-  double water_htc = 4e4;             // W/(m²K), on "*<water_suffix>"
-  double water_temperature = 20.0;    // °C
-  double air_htc = 20.0;              // W/(m²K), other named outer boundaries
-  double ambient_temperature = 20.0;  // °C
+  // The weld case's initial and boundary values (thermal.*), defaults from its schema.
+  double initial_temperature = case_default("thermal.initial_temperature");  // °C
+  double water_htc = case_default("thermal.water_htc");                      // W/(m²K), on "*<water_suffix>"
+  double water_temperature = case_default("thermal.water_temperature");      // °C
+  double air_htc = case_default("thermal.air_htc");                          // W/(m²K), other named outer boundaries
+  double ambient_temperature = case_default("thermal.ambient_temperature");  // °C
   std::string water_suffix = ".cooling_bore";
   std::vector<std::string> adiabatic_suffixes = {".axis", ".end_face"};
   // Fixed temperatures (°C) on named boundaries (verification problems); these

@@ -1,8 +1,10 @@
 // The weld process driver; see weld_driver.hpp and weld_simulation.hpp.
 #include "physics/weld_driver.hpp"
 
+#include "contact/interface_coupling.hpp"
 #include "fem/fe_values.hpp"
 #include "meshes/weld_mesh.hpp"
+#include "physics/interface_model.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -163,15 +165,15 @@ void WeldDriver::setup() {
 
   MechanicsSettings ms;
   ms.friction_coefficient = problem_.contact.friction_coefficient;
-  ms.penalty_factor = problem_.solver.contact_penalty_factor;
+  ms.contact_penalty_factor = problem_.solver.contact_penalty_factor;
   ms.contact_smoothing = problem_.solver.contact_smoothing;
-  ms.tangential_penalty_ratio = problem_.solver.friction_penalty_ratio;
+  ms.friction_penalty_ratio = problem_.solver.friction_penalty_ratio;
   ms.residual_tolerance = problem_.solver.mechanics_tolerance;
   ms.error_estimate_tolerance = problem_.solver.mechanics_error_estimate;
   ms.verbose = verbose_;
   if (problem_.solver.two_pass_sheet_contact)
     for (const auto& [name, pair] : mesh_.interfaces)
-      if (name.rfind("ss_", 0) == 0) ms.two_pass_interfaces.push_back(name);
+      if (pair.kind == meshes::interface_kind::sheet_sheet) ms.two_pass_interfaces.push_back(name);
   mech_ = std::make_unique<Mechanics>(mesh_, body_materials_, ms, problem_.thermal.initial_temperature);
 }
 
@@ -362,17 +364,20 @@ void WeldDriver::update_bonding(const Eigen::VectorXd& T) {
   std::vector<std::vector<double>> degree(pairings.size());
   for (std::size_t p = 0; p < pairings.size(); ++p) {
     degree[p].assign(pairings[p].points().size(), 0.0);
-    if (pairings[p].name().rfind("ss_", 0) != 0) continue;
+    const contact::InterfaceLaw& law = *model_.interfaces[p].law;
+    if (!law.bonds()) continue;
     for (std::size_t i = 0; i < degree[p].size(); ++i) {
       const auto& pt = pairings[p].points()[i];
       double& beta = degree[p][i];
       if (static_cast<int>(p) < bonding.n_interfaces()) beta = bonding.degree(static_cast<int>(p), static_cast<int>(i));
       if (beta < 1 && pt.paired) {
-        const double Ts = pt.slave_weights[0] * T[pt.slave_nodes[0]] + pt.slave_weights[1] * T[pt.slave_nodes[1]];
-        const double Tm = pt.master_weights[0] * T[pt.master_nodes[0]] + pt.master_weights[1] * T[pt.master_nodes[1]];
-        beta = std::max(beta, contact::bonding_degree_at_gap(Ts, solidus_[mesh_.node_body[pt.slave_nodes[0]]], Tm,
-                                                             solidus_[mesh_.node_body[pt.master_nodes[0]]],
-                                                             model_.bonding_band, pt.gap, model_.bonding_gap));
+        contact::InterfacePoint sides;
+        sides.slave = body_materials_[mesh_.node_body[pt.slave_nodes[0]]];
+        sides.master = body_materials_[mesh_.node_body[pt.master_nodes[0]]];
+        sides.slave_temperature = contact::slave_value(pt, T);
+        sides.master_temperature = contact::master_value(pt, T);
+        sides.gap = pt.gap;
+        beta = std::max(beta, law.bonding_degree(sides));
       }
     }
   }
@@ -473,7 +478,7 @@ void WeldDriver::finish() {
   double w = 0;
   int n_es = 0;
   for (const auto& st : mech_->interface_states())
-    if (st.name.rfind("es_", 0) == 0) {
+    if (mesh_.interfaces.at(st.name).kind == meshes::interface_kind::electrode_sheet) {
       w += 2 * st.contact_radius;
       ++n_es;
     }

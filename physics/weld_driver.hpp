@@ -19,6 +19,7 @@
 // failed RunResult.
 #pragma once
 
+#include "contact/interface_law.hpp"
 #include "contact/interface_laws.hpp"
 #include "fem/mesh.hpp"
 #include "materials/material_library.hpp"

@@ -2,7 +2,10 @@
 // documented values in SI, overrides reach scalars, list items and tables, every
 // relation between keys is checked with a message naming the key the user set, and
 // docs/CONFIG.md is the current generated reference.
+#include "physics/electro_thermal_step.hpp"
+#include "physics/mechanics.hpp"
 #include "physics/problem.hpp"
+#include "physics/thermal.hpp"
 #include "physics/weld_simulation.hpp"
 
 #include "tests/config/test_files.hpp"
@@ -116,6 +119,29 @@ TEST(Problem, PaperCaseGivesDocumentedValuesInSi) {
 TEST(Problem, PaperCaseSpellsOutTheSchemaDefaults) {
   const std::string path = write_case("case: {name: paper_case}\n");
   EXPECT_EQ(load_problem(paper_case).resolved_config, load_problem(path).resolved_config);
+}
+
+// A key reaches its solver under one name with one default: the solver settings that
+// mirror a key start at the schema's default, so a solver built without a case runs
+// with the same value as the default case.
+TEST(Problem, SolverSettingsMirroringAKeyStartAtItsSchemaDefault) {
+  const physics::Problem defaults = physics::make_problem(fem::Config(physics::weld_case_schema()));
+  const physics::MechanicsSettings mechanics;
+  EXPECT_EQ(physics::case_default("solver.friction_penalty_ratio"), 0.1);
+  EXPECT_EQ(mechanics.friction_penalty_ratio, defaults.solver.friction_penalty_ratio);
+  EXPECT_EQ(mechanics.friction_coefficient, defaults.contact.friction_coefficient);
+  EXPECT_EQ(mechanics.contact_penalty_factor, defaults.solver.contact_penalty_factor);
+  EXPECT_EQ(mechanics.contact_smoothing, defaults.solver.contact_smoothing);
+  const physics::ThermalSettings thermal;
+  EXPECT_EQ(thermal.initial_temperature, defaults.thermal.initial_temperature);
+  EXPECT_EQ(thermal.water_htc, defaults.thermal.water_htc);
+  EXPECT_EQ(thermal.water_temperature, defaults.thermal.water_temperature);
+  EXPECT_EQ(thermal.air_htc, defaults.thermal.air_htc);
+  EXPECT_EQ(thermal.ambient_temperature, defaults.thermal.ambient_temperature);
+  const physics::CouplingSettings coupling;
+  EXPECT_EQ(coupling.acceleration_depth, defaults.solver.coupling_acceleration_depth);
+  EXPECT_EQ(coupling.tolerance, defaults.solver.coupling_tolerance);
+  EXPECT_EQ(coupling.max_iterations, defaults.solver.max_coupling_iterations);
 }
 
 TEST(Problem, PaperNominalUsesThePapersContactValues) {

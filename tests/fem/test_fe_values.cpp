@@ -1,5 +1,6 @@
 // Q1 values: Gauss rules, shape function derivatives against finite differences,
-// and the axisymmetric measure (volumes and areas of revolution).
+// the axisymmetric measure (volumes and areas of revolution), and the cached
+// Gauss-point geometry of a mesh (fem::CellGeometry).
 #include "fem/fe_values.hpp"
 #include "fem/quadtree.hpp"
 
@@ -57,6 +58,31 @@ TEST(CellValues, PhysicalGradientsOfAffineFieldAreExactOnDistortedCell) {
     for (int a = 0; a < 4; ++a) g += (3.0 * m.nodes[a].x() - 2.0 * m.nodes[a].y()) * fv.grad_N(q, a);
     EXPECT_NEAR(g.x(), 3.0, 1e-13);
     EXPECT_NEAR(g.y(), -2.0, 1e-13);
+  }
+}
+
+// The Gauss-point geometry cache holds what CellValues gives on the positions of its
+// last update, and follows the positions when they change.
+TEST(CellGeometry, HoldsTheCellValuesOfTheLastPositions) {
+  const fem::Mesh m = one_cell({fem::Point(0.1, 0.0), fem::Point(1.2, 0.2), fem::Point(1.0, 1.1), fem::Point(0.2, 0.8)});
+  fem::CellGeometry geometry(m, 2);
+  ASSERT_EQ(geometry.n_q(), 4);
+  std::vector<fem::Point> moved = m.nodes;
+  for (auto& x : moved) x = 1.5 * x + fem::Point(0.3, -0.1);
+  for (const auto& positions : {m.nodes, moved, moved}) {
+    geometry.update(positions);
+    fem::Mesh current = m;
+    current.nodes = positions;
+    fem::CellValues cv(2);
+    cv.reinit(current, 0);
+    EXPECT_EQ(geometry.current().nodes, positions);
+    for (int q = 0; q < cv.n_q(); ++q) {
+      EXPECT_EQ(geometry.JxW()[q], cv.JxW(q));
+      for (int a = 0; a < 4; ++a) {
+        EXPECT_EQ(geometry.grad()[4 * q + a], cv.grad_N(q, a));
+        EXPECT_EQ(geometry.shape()[q][a], cv.N(q, a));
+      }
+    }
   }
 }
 

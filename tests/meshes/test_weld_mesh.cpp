@@ -149,6 +149,20 @@ TEST(WeldMesh, ThreeSheetStackOfUnequalThicknessMeshes) {
   EXPECT_NEAR(body_volume(mesh, mesh.body_index("sheet_2")), M_PI * R * R * 1.5e-3, 1e-18);
 }
 
+// The mesh builder says which interface law applies where: the electrode contacts
+// are electrode/sheet, every contact between two sheets sheet/sheet, whatever the
+// interfaces are called.
+TEST(WeldMesh, EachInterfaceCarriesTheKindThatSelectsItsLaw) {
+  meshes::StackGeometry s;
+  s.sheets = {{"", "DP1200", 0.8e-3}, {"", "DP600", 1.5e-3}, {"", "DC04", 0.7e-3}};
+  const fem::Mesh mesh = meshes::weld_mesh(s, {});
+  ASSERT_EQ(mesh.interfaces.size(), 4u);
+  EXPECT_EQ(mesh.interfaces.at("es_upper").kind, meshes::interface_kind::electrode_sheet);
+  EXPECT_EQ(mesh.interfaces.at("es_lower").kind, meshes::interface_kind::electrode_sheet);
+  EXPECT_EQ(mesh.interfaces.at("ss_1_2").kind, meshes::interface_kind::sheet_sheet);
+  EXPECT_EQ(mesh.interfaces.at("ss_2_3").kind, meshes::interface_kind::sheet_sheet);
+}
+
 TEST(ElectrodeVolume, ConeElectrodeWithFlatFaceIsExact) {
   meshes::ElectrodeGeometry g;
   g.face_radius = 0;  // flat face: the profile is a polygon, meshed exactly

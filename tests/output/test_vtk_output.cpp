@@ -54,7 +54,7 @@ Mesh two_body_mesh() {
   m.boundaries["sheet_1.top"] = {{c0, 2}, {c1, 2}};
   m.boundaries["sheet_1.axis"] = {{c0, 3}};
   m.boundaries["electrode.bottom"] = {{c2, 0}, {c3, 0}};
-  m.interfaces["es_upper"] = {"electrode.bottom", "sheet_1.top"};
+  m.interfaces["es_upper"] = {"electrode.bottom", "sheet_1.top", "electrode_sheet"};
   return m;
 }
 

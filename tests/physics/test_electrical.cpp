@@ -2,9 +2,11 @@
 // R = ρL/(πr²) (exact on any mesh), the two-block contact column (docs/VERIFICATION.md)
 // (exact for bilinear elements, also on non-matching meshes), and current and energy
 // conservation on the default weld stack with contact, bonding and a hot spot.
+#include "contact/film_contact_law.hpp"
 #include "mechanics_fixtures.hpp"
 #include "meshes/weld_mesh.hpp"
 #include "physics/electrical.hpp"
+#include "physics/interface_model.hpp"
 #include "physics/problem.hpp"
 
 #include <gtest/gtest.h>
@@ -56,7 +58,7 @@ contact::ContactState fixed_contact(const std::vector<contact::InterfacePairing>
 fem::Mesh two_block_column(double L, double radius, double lower_size, double upper_size) {
   fem::Mesh mesh = test::block_mesh("lower", 0, radius, 0, L, lower_size);
   mesh.append(test::block_mesh("upper", 0, radius, L, 2 * L, upper_size));
-  mesh.interfaces["contact"] = {"upper.bottom", "lower.top"};
+  mesh.interfaces["contact"] = {"upper.bottom", "lower.top", "film_contact"};
   return mesh;
 }
 
@@ -118,8 +120,8 @@ TEST(ElectricalContact, TwoBlockPotentialMatchesClosedForm) {
   const auto upper_mat = conductor("upper_metal", rho_1, 350e6);
   const auto lower_mat = conductor("lower_metal", rho_2, 900e6);
   const fem::Mesh mesh = two_block_column(L, radius, 0.25e-3, upper_size);
-  contact::InterfaceModel model;
-  model.interfaces = {{"contact", 1e-6, 2e-6, 1e-3, false}};
+  const contact::InterfaceProperties props{"contact", 1e-6, 2e-6, 1e-3, false};
+  const contact::InterfaceModel model = contact::film_contact_model({props});
   physics::Electrical electrical(mesh, {&lower_mat, &upper_mat}, model, column_settings());
   std::vector<contact::InterfacePairing> pairings;
   pairings.emplace_back(mesh, "contact", 2);
@@ -127,7 +129,7 @@ TEST(ElectricalContact, TwoBlockPotentialMatchesClosedForm) {
   const Eigen::VectorXd T = Eigen::VectorXd::Constant(mesh.n_nodes(), 20.0);
   const auto& sol = electrical.solve(mesh.nodes, T, current, contact);
 
-  const double C = contact::electrical_contact_conductance(upper_mat, lower_mat, pressure, 20.0, 20.0, model.interfaces[0]).value;
+  const double C = contact::electrical_contact_conductance(upper_mat, lower_mat, pressure, 20.0, 20.0, props).value;
   const double s1 = 1 / rho_1, s2 = 1 / rho_2;
   const double D = s1 * s2 + C * L * (s1 + s2);
   const double V = current / (M_PI * radius * radius) * (L / s1 + 1 / C + L / s2);
@@ -167,9 +169,10 @@ TEST(ElectricalContact, NearlyRigidBondedInterfaceSolvesToRoundOffOfItsBackwardE
   const auto upper_mat = conductor("upper_metal", rho_1, 350e6);
   const auto lower_mat = conductor("lower_metal", rho_2, 900e6);
   const fem::Mesh mesh = two_block_column(L, radius, 0.25e-3, 0.25e-3);
-  contact::InterfaceModel model;
-  model.interfaces = {{"contact", 1e-6, 2e-6, 1e-3, true}};
-  model.bonded_factor = factor;
+  const contact::InterfaceProperties props{"contact", 1e-6, 2e-6, 1e-3, true};
+  contact::FilmContactConstants constants;
+  constants.bonded_factor = factor;
+  const contact::InterfaceModel model = contact::film_contact_model({props}, constants);
   physics::Electrical electrical(mesh, {&lower_mat, &upper_mat}, model, column_settings());
   std::vector<contact::InterfacePairing> pairings;
   pairings.emplace_back(mesh, "contact", 2);
@@ -198,15 +201,15 @@ TEST(ElectricalContact, TwoBlockOnNonMatchingMeshesConservesCurrent) {
   const auto upper_mat = conductor("upper_metal", 2e-8, 350e6);
   const auto lower_mat = conductor("lower_metal", 3e-7, 900e6);
   const fem::Mesh mesh = two_block_column(L, radius, L / 4, L / 6);
-  contact::InterfaceModel model;
-  model.interfaces = {{"contact", 1e-6, 2e-6, 1e-3, false}};
+  const contact::InterfaceProperties props{"contact", 1e-6, 2e-6, 1e-3, false};
+  const contact::InterfaceModel model = contact::film_contact_model({props});
   physics::Electrical electrical(mesh, {&lower_mat, &upper_mat}, model, column_settings());
   std::vector<contact::InterfacePairing> pairings;
   pairings.emplace_back(mesh, "contact", 2);
   const auto contact = fixed_contact(pairings, [&](const std::string&, const fem::Point&) { return pressure; });
   const Eigen::VectorXd T = Eigen::VectorXd::Constant(mesh.n_nodes(), 20.0);
   const auto& sol = electrical.solve(mesh.nodes, T, current, contact);
-  const double C = contact::electrical_contact_conductance(upper_mat, lower_mat, pressure, 20.0, 20.0, model.interfaces[0]).value;
+  const double C = contact::electrical_contact_conductance(upper_mat, lower_mat, pressure, 20.0, 20.0, props).value;
   const double V = current / (M_PI * radius * radius) * (L * 2e-8 + 1 / C + L * 3e-7);
   std::printf("two-block contact, non-matching meshes: V = %.9e V (closed form %.9e, %.1e relative), interface "
               "current %.9f A, ground current %.9f A\n",
@@ -238,14 +241,14 @@ TEST(ElectricalVerification, CurrentIsConservedThroughEveryInterfaceOfTheWeldSta
 
   std::vector<contact::InterfacePairing> pairings;
   for (const auto& [name, pair] : mesh.interfaces) pairings.emplace_back(mesh, name, 2);
-  const auto contact = fixed_contact(pairings, [](const std::string& name, const fem::Point& x) {
-    const double a = name.rfind("es_", 0) == 0 ? 2.5e-3 : 3e-3;
+  const auto contact = fixed_contact(pairings, [&mesh](const std::string& name, const fem::Point& x) {
+    const double a = mesh.interfaces.at(name).kind == meshes::interface_kind::electrode_sheet ? 2.5e-3 : 3e-3;
     return 300e6 * std::max(0.0, 1 - std::pow(x.x() / a, 2));
   });
   contact::BondingState bonding(pairings);
   int p_ss = 0;
   for (const auto& [name, pair] : mesh.interfaces) {
-    if (name.rfind("ss_", 0) == 0) break;
+    if (pair.kind == meshes::interface_kind::sheet_sheet) break;
     ++p_ss;
   }
   for (std::size_t i = 0; i < pairings[p_ss].points().size(); ++i)
@@ -286,9 +289,9 @@ TEST(Electrical, FloatingBodyIsReported) {
   const auto metal = conductor("metal", 1e-7, 300e6);
   fem::Mesh mesh = test::block_mesh("lower", 0, 1e-3, 0, 1e-3, 0.25e-3);
   mesh.append(test::block_mesh("upper", 0, 1e-3, 1e-3, 2e-3, 0.25e-3));
-  mesh.interfaces["contact"] = {"upper.bottom", "lower.top"};
-  contact::InterfaceModel model;
-  model.interfaces = {{"contact", 1e-6, 2e-6, 1e-3, false}};
+  mesh.interfaces["contact"] = {"upper.bottom", "lower.top", "film_contact"};
+  const contact::InterfaceProperties props{"contact", 1e-6, 2e-6, 1e-3, false};
+  const contact::InterfaceModel model = contact::film_contact_model({props});
   physics::ElectricalSettings s;
   s.current_boundary = "upper.top";
   s.ground_boundary = "lower.bottom";

@@ -1,10 +1,19 @@
 // Interface laws (contact/interface_laws.hpp) against hand-computed values of the
 // paper's equations 1 and 2, central finite differences of every derivative the
 // solvers use, the limit h_e → 0 as σ_n → 0, the C¹ closure factor, bonding, and the
-// mechanical contact laws (contact/mechanical_contact.hpp).
+// mechanical contact laws (contact/mechanical_contact.hpp); the film-contact law
+// object (contact/film_contact_law.hpp), the choice of each interface's law by its
+// kind (physics/interface_model.hpp) and the interface layer of the electrical and
+// thermal fields (contact/interface_coupling.hpp).
+#include "contact/film_contact_law.hpp"
+#include "contact/interface_coupling.hpp"
 #include "contact/interface_laws.hpp"
 #include "contact/mechanical_contact.hpp"
+#include "fem/dof_map.hpp"
 #include "materials/material_library.hpp"
+#include "meshes/weld_mesh.hpp"
+#include "physics/interface_model.hpp"
+#include "physics/problem.hpp"
 
 #include <gtest/gtest.h>
 
@@ -252,6 +261,163 @@ TEST(InterfaceLaws, PartlyBondedConductanceIsTheFadingFilmInSeriesWithTheBondedL
   EXPECT_NEAR(contact::partly_bonded_conductance(hc, hb, 0.9), 1 / (0.1 / hc + 0.9 / hb), 1e-4);
   EXPECT_EQ(contact::partly_bonded_conductance(0.0, hb, 0.7), 0.0);  // open contact: no path until bonded
   EXPECT_EQ(contact::partly_bonded_conductance(0.0, hb, 1.0), hb);
+}
+
+// The film-contact law at a closed, unbonded point: h_e of paper eq. 1 and h of eq. 2
+// by hand (CuCrZr at 455 °C on DP1200 at 655 °C, 200 MPa, closed: χ = 1); an open
+// point (gap ≥ g_c, no pressure) conducts neither current nor heat.
+TEST(FilmContactLaw, ClosedPointConductsByPaperEquationsOneAndTwo) {
+  materials::MaterialLibrary library;
+  const auto copper = library.load("CuCrZr");
+  const auto steel = library.load("DP1200");
+  const contact::InterfaceProperties props{"es", 1e-5, 5e-6, 1e-2, false};
+  const contact::FilmContactLaw law(props);
+  contact::InterfacePoint pt;
+  pt.slave = &copper;
+  pt.master = &steel;
+  pt.slave_temperature = 455.0;
+  pt.master_temperature = 655.0;
+  pt.pressure = 200e6;
+  pt.gap = -1e-7;
+  const double soft = std::min(copper.yield_stress(0, 455.0).yield_stress, steel.yield_stress(0, 655.0).yield_stress);
+  const double rho_bar =
+      0.5 * (copper.electrical_resistivity(455.0).value + steel.electrical_resistivity(655.0).value);
+  const double h_e = 1 / ((3 * soft / 200e6 * rho_bar + 5e-6) * 1e-5);
+  EXPECT_NEAR(law.electrical_conductance(pt), h_e, 1e-12 * h_e);
+  const double k_bar = 0.5 * (copper.thermal_conductivity(455.0).value + steel.thermal_conductivity(655.0).value);
+  const double htc = 1e-2 * k_bar / 1e-6 * (1 - std::exp(-(200e6 / soft + 1)));  // P2 = 1 µm, P3 = P4 = 1
+  EXPECT_NEAR(law.thermal_conductance(pt), htc, 1e-12 * htc);
+  EXPECT_FALSE(law.bonds());
+  EXPECT_EQ(law.bonding_degree(pt), 0.0);
+
+  pt.pressure = 0;
+  pt.gap = 1e-6;
+  EXPECT_EQ(law.electrical_conductance(pt), 0.0);
+  EXPECT_EQ(law.thermal_conductance(pt), 0.0);
+}
+
+// A fully bonded point conducts like the bonded layer, F (k_s + k_m)/h_local, for
+// current and heat alike, open or closed; a law of a bonding interface reports the
+// degree of contact::bonding_degree_at_gap.
+TEST(FilmContactLaw, BondedPointConductsLikeTheBondedLayer) {
+  materials::MaterialLibrary library;
+  const auto steel = library.load("DP1200");
+  contact::FilmContactConstants constants;
+  constants.bonding_band = 50;
+  const contact::FilmContactLaw law({"ss", 1e-5, 5e-6, 1e-2, true}, constants);
+  contact::InterfacePoint pt;
+  pt.slave = pt.master = &steel;
+  pt.slave_temperature = 1400.0;
+  pt.master_temperature = 1450.0;
+  pt.gap = 2e-6;
+  pt.face_length = 62.5e-6;
+  pt.bonding_degree = 1.0;
+  const double sigma = 1 / steel.electrical_resistivity(1400.0).value + 1 / steel.electrical_resistivity(1450.0).value;
+  const double k = steel.thermal_conductivity(1400.0).value + steel.thermal_conductivity(1450.0).value;
+  EXPECT_NEAR(law.electrical_conductance(pt), 1e3 * sigma / 62.5e-6, 1e-12 * 1e3 * sigma / 62.5e-6);
+  EXPECT_NEAR(law.thermal_conductance(pt), 1e3 * k / 62.5e-6, 1e-12 * 1e3 * k / 62.5e-6);
+  EXPECT_TRUE(law.bonds());
+  const double sol = steel.solidus();
+  pt.slave_temperature = sol - 10;
+  pt.master_temperature = sol;
+  pt.gap = 0;
+  EXPECT_EQ(law.bonding_degree(pt), contact::bonding_degree_at_gap(sol - 10, sol, sol, sol, 50, 0, 1e-6));
+  EXPECT_GT(law.bonding_degree(pt), 0.5);
+}
+
+// Each interface of the weld mesh gets the law of its kind: electrode/sheet with the
+// contact.electrode_sheet parameters and no bonding, sheet/sheet with its own and
+// bonding; an interface of a kind without a law is refused by name.
+TEST(InterfaceModel, EachInterfaceGetsTheLawOfItsKind) {
+  const physics::Problem problem = physics::make_problem(fem::Config(physics::weld_case_schema()));
+  physics::ContactParameters parameters = problem.contact;
+  parameters.electrode_sheet.film_thickness = 2e-5;
+  parameters.sheet_sheet.film_thickness = 3e-5;
+  const fem::Mesh mesh = meshes::weld_mesh(problem.geometry, problem.mesh);
+  const contact::InterfaceModel model = physics::interface_model(mesh, parameters);
+  ASSERT_EQ(model.interfaces.size(), mesh.interfaces.size());
+  std::size_t k = 0;
+  for (const auto& [name, pair] : mesh.interfaces) {
+    const auto& entry = model.interfaces[k++];
+    EXPECT_EQ(entry.name, name);
+    const auto* law = dynamic_cast<const contact::FilmContactLaw*>(entry.law.get());
+    ASSERT_NE(law, nullptr) << name;
+    const bool sheet_sheet = pair.kind == meshes::interface_kind::sheet_sheet;
+    EXPECT_EQ(law->bonds(), sheet_sheet) << name;
+    EXPECT_EQ(law->properties().film_thickness, sheet_sheet ? 3e-5 : 2e-5) << name;
+    EXPECT_EQ(law->constants().bonding_band, parameters.bonding_band);
+    EXPECT_EQ(law->constants().thermal.p2, parameters.htc_p2);
+  }
+
+  fem::Mesh renamed = mesh;
+  renamed.interfaces["glued"] = {"sheet_1.bottom", "sheet_2.top", "adhesive"};
+  try {
+    physics::interface_model(renamed, parameters);
+    FAIL() << "an interface of unknown kind was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("'glued'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("'adhesive'"), std::string::npos) << e.what();
+  }
+}
+
+// Each side's value at a pairing point is its face interpolation, and the jump their
+// difference: slave 0.25·2 + 0.75·4 = 3.5, master 0.5·10 + 0.5·6 = 8, jump −4.5.
+TEST(InterfaceCoupling, SideValuesAreTheFaceInterpolationsOfEachSide) {
+  contact::ContactPoint pt;
+  pt.slave_nodes = {0, 1};
+  pt.slave_weights = {0.25, 0.75};
+  pt.master_nodes = {2, 3};
+  pt.master_weights = {0.5, 0.5};
+  const Eigen::VectorXd u = (Eigen::VectorXd(4) << 2.0, 4.0, 10.0, 6.0).finished();
+  EXPECT_EQ(contact::slave_value(pt, u), 3.5);
+  EXPECT_EQ(contact::master_value(pt, u), 8.0);
+  EXPECT_EQ(contact::jump(pt, u), -4.5);
+}
+
+// The shared interface layer on the default weld mesh: one coupling group per slave
+// face; the conductance at a paired point in the pattern is the law's at that point,
+// 0 elsewhere; a contact state paired otherwise is refused.
+TEST(InterfaceCoupling, ConductancesAreTheLawsAtThePairedPoints) {
+  const physics::Problem problem = physics::make_problem(fem::Config(physics::weld_case_schema()));
+  const fem::Mesh mesh = meshes::weld_mesh(problem.geometry, problem.mesh);
+  materials::MaterialLibrary library;
+  const auto copper = library.load("CuCrZr");
+  const auto steel = library.load("DP1200");
+  std::vector<const materials::Material*> node_material;
+  for (int n = 0; n < mesh.n_nodes(); ++n)
+    node_material.push_back(mesh.body_names[mesh.node_body[n]].find("electrode") != std::string::npos ? &copper
+                                                                                                       : &steel);
+  const fem::DofMap dofs(mesh, 1);
+  const contact::InterfaceCoupling layer(mesh, physics::interface_model(mesh, problem.contact), dofs, 2, 0.5e-3,
+                                         "Test");
+  ASSERT_EQ(layer.size(), mesh.interfaces.size());
+  std::size_t faces = 0;
+  for (const auto& pairing : layer.pairings()) faces += pairing.n_slave_faces();
+  EXPECT_EQ(layer.groups().size(), faces);
+  EXPECT_EQ(layer.dof_groups().size(), faces);
+
+  contact::ContactState state;
+  state.pairings = &layer.pairings();
+  for (const auto& pairing : layer.pairings()) state.pressure.emplace_back(pairing.points().size(), 100e6);
+  EXPECT_NO_THROW(layer.check(state));
+  const Eigen::VectorXd T = Eigen::VectorXd::Constant(mesh.n_nodes(), 300.0);
+  std::vector<std::vector<double>> h;
+  layer.conductances(contact::InterfaceField::electrical, state, {}, T, node_material, h);
+  int conducting = 0;
+  for (std::size_t p = 0; p < layer.size(); ++p)
+    for (std::size_t i = 0; i < h[p].size(); ++i) {
+      const auto& pt = layer.pairings()[p].points()[i];
+      const bool coupled = pt.paired && contact::point_stencil(layer.pairings()[p], pt.slave_face, pt).in_pattern();
+      const double expected =
+          coupled ? layer.law(p).electrical_conductance(layer.point(state, {}, p, i, T, node_material)) : 0.0;
+      EXPECT_EQ(h[p][i], expected);
+      conducting += h[p][i] > 0;
+    }
+  EXPECT_GT(conducting, 0);
+
+  contact::ContactState short_state = state;
+  short_state.pressure.pop_back();
+  EXPECT_THROW(layer.check(short_state), std::invalid_argument);
 }
 
 // The C¹ penalty law of the mechanical contact (contact/mechanical_contact.hpp): zero

@@ -57,7 +57,7 @@ fem::Mesh two_blocks() {
   };
   fem::Mesh mesh = block("upper", 0.0, 0.5e-3, 4);
   mesh.append(block("lower", -0.5e-3, 0.0, 5));
-  mesh.interfaces["tie"] = {"upper.bottom", "lower.top"};
+  mesh.interfaces["tie"] = {"upper.bottom", "lower.top", "tie"};
   return mesh;
 }
 

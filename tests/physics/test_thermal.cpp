@@ -6,10 +6,12 @@
 // backward Euler, and the energy balance ∫VI dt = stored + removed through melting,
 // bonding and the λ_m switch. Each test derives its reference numbers from the
 // closed form and prints them.
+#include "contact/film_contact_law.hpp"
 #include "fem/fe_values.hpp"
 #include "mechanics_fixtures.hpp"
 #include "meshes/weld_mesh.hpp"
 #include "physics/electrical.hpp"
+#include "physics/interface_model.hpp"
 #include "physics/problem.hpp"
 #include "physics/thermal.hpp"
 
@@ -220,9 +222,9 @@ TEST(ThermalVerification, TwoBlockElectroThermalContactMatchesClosedForm) {
   const auto upper_mat = make_material(upper_spec);
   fem::Mesh mesh = test::block_mesh("lower", 0, R, 0, L, L / 8);
   mesh.append(test::block_mesh("upper", 0, R, L, 2 * L, L / 8));
-  mesh.interfaces["contact"] = {"upper.bottom", "lower.top"};
-  contact::InterfaceModel model;
-  model.interfaces = {{"contact", 1e-4, 1e-5, 1e-3, false}};
+  mesh.interfaces["contact"] = {"upper.bottom", "lower.top", "film_contact"};
+  const contact::InterfaceProperties props{"contact", 1e-4, 1e-5, 1e-3, false};
+  const contact::InterfaceModel model = contact::film_contact_model({props});
   const std::vector<const materials::Material*> mats{&lower_mat, &upper_mat};
   physics::ElectricalSettings es;
   es.current_boundary = "upper.top";
@@ -243,9 +245,9 @@ TEST(ThermalVerification, TwoBlockElectroThermalContactMatchesClosedForm) {
   }
 
   const double j = current / (M_PI * R * R);
-  const double C = contact::electrical_contact_conductance(upper_mat, lower_mat, pressure, T_0, T_0, model.interfaces[0]).value;
-  const double h = contact::thermal_contact_conductance(upper_mat, lower_mat, pressure, T_0, T_0, model.interfaces[0],
-                                                        model.thermal)
+  const double C = contact::electrical_contact_conductance(upper_mat, lower_mat, pressure, T_0, T_0, props).value;
+  const double h = contact::thermal_contact_conductance(upper_mat, lower_mat, pressure, T_0, T_0, props,
+                                                        contact::ThermalContactConstants{})
                        .value;
   const double q1 = j * j * 1e-7, q2 = j * j * 3e-7, qs = j * j / C, k1 = 50, k2 = 25;
   // T_1(L) − T_2(L) = (a_1 − a_2) L − q_1L²/(2k_1) + q_2L²/(2k_2)
@@ -388,9 +390,9 @@ TEST(ThermalVerification, EnergyIsConservedThroughMeltingAndBonding) {
   const double R = 0.5e-3, t = 0.5e-3, current = 800.0, dt = 0.5e-3;
   fem::Mesh mesh = test::block_mesh("sheet_2", 0, R, -t, 0, t / 8);
   mesh.append(test::block_mesh("sheet_1", 0, R, 0, t, t / 8));
-  mesh.interfaces["ss_1_2"] = {"sheet_1.bottom", "sheet_2.top"};
-  contact::InterfaceModel model;
-  model.interfaces = {{"ss_1_2", 1e-5, 2e-5, 1e-3, true}};
+  mesh.interfaces["ss_1_2"] = {"sheet_1.bottom", "sheet_2.top", meshes::interface_kind::sheet_sheet};
+  const contact::InterfaceProperties props{"ss_1_2", 1e-5, 2e-5, 1e-3, true};
+  const contact::InterfaceModel model = contact::film_contact_model({props});
   const std::vector<const materials::Material*> mats{&steel, &steel};
   physics::ElectricalSettings es;
   es.current_boundary = "sheet_1.top";
@@ -452,9 +454,9 @@ TEST(ThermalNewton, TangentMatchesFiniteDifferences) {
   const double R = 0.5e-3, t = 0.5e-3;
   fem::Mesh mesh = test::block_mesh("sheet_2", 0, R, -t, 0, t / 4);
   mesh.append(test::block_mesh("sheet_1", 0, R, 0, t, t / 4));
-  mesh.interfaces["ss_1_2"] = {"sheet_1.bottom", "sheet_2.top"};
-  contact::InterfaceModel model;
-  model.interfaces = {{"ss_1_2", 1e-5, 2e-5, 1e-3, true}};
+  mesh.interfaces["ss_1_2"] = {"sheet_1.bottom", "sheet_2.top", meshes::interface_kind::sheet_sheet};
+  const contact::InterfaceProperties props{"ss_1_2", 1e-5, 2e-5, 1e-3, true};
+  const contact::InterfaceModel model = contact::film_contact_model({props});
   physics::ThermalSettings ts;
   ts.air_htc = 2e3;
   ts.melt_conductivity = 117.5;
@@ -591,8 +593,8 @@ TEST(ThermalPerformance, WeldStackStepsConvergeAndBalanceEnergy) {
   physics::Thermal thermal(mesh, mats, model, physics::thermal_settings(problem.thermal));
   std::vector<contact::InterfacePairing> pairings;
   for (const auto& [name, pair] : mesh.interfaces) pairings.emplace_back(mesh, name, 2);
-  const auto contact = fixed_contact(pairings, [](const std::string& name, const fem::Point& x) {
-    const double a = name.rfind("es_", 0) == 0 ? 2.5e-3 : 3e-3;
+  const auto contact = fixed_contact(pairings, [&mesh](const std::string& name, const fem::Point& x) {
+    const double a = mesh.interfaces.at(name).kind == meshes::interface_kind::electrode_sheet ? 2.5e-3 : 3e-3;
     return 300e6 * std::max(0.0, 1 - std::pow(x.x() / a, 2));
   });
   Eigen::VectorXd T(mesh.n_nodes());
