@@ -16,6 +16,7 @@ set(RSW_CALIBRATION_FARM_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/sensitivity.cpp
   ${CMAKE_CURRENT_LIST_DIR}/calibration_study.cpp
   ${CMAKE_CURRENT_LIST_DIR}/calibrate.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/calibration_results_file.cpp
   ${CMAKE_CURRENT_LIST_DIR}/command_model.cpp)
 set(RSW_CALIBRATION_FARM_LIBS rsw_fem nlohmann_json::nlohmann_json)
 

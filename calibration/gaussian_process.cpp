@@ -16,6 +16,35 @@
 
 namespace rsw::calibration {
 
+const char* kernel_name(KernelType kernel) {
+  return kernel == KernelType::SquaredExponential ? "squared_exponential" : "matern52";
+}
+
+const char* trend_name(TrendType trend) {
+  switch (trend) {
+    case TrendType::Constant:
+      return "constant";
+    case TrendType::DiagonalQuadratic:
+      return "diagonal_quadratic";
+    case TrendType::FullQuadratic:
+      return "full_quadratic";
+  }
+  return "unknown";
+}
+
+const char* nugget_name(NuggetMode mode) {
+  switch (mode) {
+    case NuggetMode::Off:
+      return "off";
+    case NuggetMode::Fixed:
+      return "fixed";
+    case NuggetMode::Estimated:
+      return "estimated";
+  }
+  return "unknown";
+}
+
+
 namespace {
 
 constexpr double kLogTwoPi = 1.8378770664093454835606594728112;

@@ -67,6 +67,11 @@ enum class KernelType { SquaredExponential, Matern52 };
 enum class TrendType { Constant, DiagonalQuadratic, FullQuadratic };
 enum class NuggetMode { Off, Fixed, Estimated };
 
+// The names of the study keys (calibration.*.kernel, trend, nugget).
+const char* kernel_name(KernelType kernel);
+const char* trend_name(TrendType trend);
+const char* nugget_name(NuggetMode mode);
+
 struct GaussianProcessHyperparameters {
   Eigen::VectorXd length_scales;  // ℓ_j, input units
   double signal_variance = 1.0;   // σ², output units²

@@ -8,6 +8,19 @@
 
 namespace rsw::calibration {
 
+const char* noise_kind_name(ObservationNoise::Kind kind) {
+  switch (kind) {
+    case ObservationNoise::Kind::GivenStandardDeviations:
+      return "standard_deviations";
+    case ObservationNoise::Kind::RelativeToObservedMean:
+      return "relative";
+    case ObservationNoise::Kind::ReplicateScatter:
+      return "replicate_scatter";
+  }
+  return "unknown";
+}
+
+
 namespace {
 
 constexpr double kLogTwoPi = 1.8378770664093454835606594728112;

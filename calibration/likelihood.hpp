@@ -39,6 +39,9 @@ struct ObservationNoise {
   static ObservationNoise replicate_scatter();
 };
 
+// The name of the study key's value (calibration.noise.kind).
+const char* noise_kind_name(ObservationNoise::Kind kind);
+
 class GaussianLikelihood {
  public:
   // observations: N_obs × p, column j is feature feature_names[j].

@@ -94,19 +94,6 @@ std::vector<std::string> fields_from_json(const std::string& text, const std::st
   return values;
 }
 
-fem::RowMajorMatrix to_row_major(const Eigen::MatrixXd& m) {
-  fem::RowMajorMatrix out;
-  out.n_rows = static_cast<std::size_t>(m.rows());
-  out.n_cols = static_cast<std::size_t>(m.cols());
-  out.values.resize(out.n_rows * out.n_cols);
-  for (std::size_t i = 0; i < out.n_rows; ++i) {
-    for (std::size_t j = 0; j < out.n_cols; ++j) {
-      out.values[i * out.n_cols + j] = m(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
-    }
-  }
-  return out;
-}
-
 Eigen::MatrixXd from_row_major(const fem::RowMajorMatrix& m) {
   Eigen::MatrixXd out(static_cast<Eigen::Index>(m.n_rows), static_cast<Eigen::Index>(m.n_cols));
   for (std::size_t i = 0; i < m.n_rows; ++i) {
@@ -276,6 +263,20 @@ class ResultsWriter {
 };
 
 }  // namespace
+
+fem::RowMajorMatrix to_row_major(const Eigen::MatrixXd& m) {
+  fem::RowMajorMatrix out;
+  out.n_rows = static_cast<std::size_t>(m.rows());
+  out.n_cols = static_cast<std::size_t>(m.cols());
+  out.values.resize(out.n_rows * out.n_cols);
+  for (std::size_t i = 0; i < out.n_rows; ++i) {
+    for (std::size_t j = 0; j < out.n_cols; ++j) {
+      out.values[i * out.n_cols + j] = m(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
+    }
+  }
+  return out;
+}
+
 
 struct ResultsFile::Impl : ResultsWriter {
   using ResultsWriter::ResultsWriter;

@@ -7,11 +7,18 @@
 
 #include "calibration/farm.hpp"
 
+#include "fem/hdf5_file.hpp"
+
+#include <Eigen/Core>
+
 #include <cstddef>
 #include <filesystem>
 #include <memory>
 
 namespace rsw::calibration::farm_detail {
+
+// An Eigen matrix as the HDF5 wrapper's row-major table.
+fem::RowMajorMatrix to_row_major(const Eigen::MatrixXd& m);
 
 class ResultsFile {
  public:
