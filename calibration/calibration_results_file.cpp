@@ -6,6 +6,7 @@
 #include "calibration/study_results_file.hpp"
 
 #include "fem/hdf5_file.hpp"
+#include "fem/text.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -28,25 +29,8 @@ const char* const calibration_format = "rsw calibration results";
 
 // --- text helpers ------------------------------------------------------------------
 
-std::string number_text(double value, int precision = 17) {
-  if (!std::isfinite(value)) return "nan";
-  std::ostringstream out;
-  out << std::setprecision(precision) << value;
-  return out.str();
-}
 
-std::string csv_text(const std::string& text) {
-  if (text.find_first_of(",\"\n") == std::string::npos) return text;
-  std::string quoted = "\"";
-  for (char c : text) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return quoted + "\"";
-}
 
-void write_text(const fs::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-  if (!out) throw std::runtime_error("cannot write '" + path.string() + "'");
-}
 
 Json finite_or_null(double value) { return std::isfinite(value) ? Json(value) : Json(nullptr); }
 
@@ -84,15 +68,15 @@ void write_posterior_csv(const fs::path& path, const CalibrationResult& result) 
   std::ostringstream csv;
   csv << "sample";
   for (std::size_t i = 0; i < result.parameter_names.size(); ++i) {
-    csv << "," << csv_text(unit_label(result.parameter_names[i], result.parameter_units[i]));
+    csv << "," << fem::csv_text(unit_label(result.parameter_names[i], result.parameter_units[i]));
   }
   csv << "\n";
   for (Eigen::Index s = 0; s < result.samples.rows(); ++s) {
     csv << s;
-    for (Eigen::Index i = 0; i < result.samples.cols(); ++i) csv << "," << number_text(result.samples(s, i));
+    for (Eigen::Index i = 0; i < result.samples.cols(); ++i) csv << "," << fem::number_text(result.samples(s, i));
     csv << "\n";
   }
-  write_text(path, csv.str());
+  fem::write_text_file(path, csv.str());
 }
 
 // Columns of the emulator route's diagnostics table, then one variance ratio per feature.
@@ -163,16 +147,16 @@ void write_diagnostics_csv(const fs::path& path, const CalibrationResult& result
   const Eigen::MatrixXd table = diagnostics_table(result);
   const std::vector<std::string> header = diagnostics_header(result);
   std::ostringstream csv;
-  for (std::size_t c = 0; c < header.size(); ++c) csv << (c ? "," : "") << csv_text(header[c]);
+  for (std::size_t c = 0; c < header.size(); ++c) csv << (c ? "," : "") << fem::csv_text(header[c]);
   csv << "\n";
   for (Eigen::Index r = 0; r < table.rows(); ++r) {
     for (Eigen::Index c = 0; c < table.cols(); ++c) {
       const bool count = c < 3;
-      csv << (c ? "," : "") << (count ? std::to_string(static_cast<long long>(table(r, c))) : number_text(table(r, c)));
+      csv << (c ? "," : "") << (count ? std::to_string(static_cast<long long>(table(r, c))) : fem::number_text(table(r, c)));
     }
     csv << "\n";
   }
-  write_text(path, csv.str());
+  fem::write_text_file(path, csv.str());
 }
 
 Json parameters_json(const Study& study, const CalibrationResult& result) {
@@ -470,7 +454,7 @@ CalibrationFiles write_calibration_results(const Study& study, const Calibration
   write_h5(files.h5, study, result, settings, likelihood, observations, predictive, summary);
   write_posterior_csv(files.posterior_csv, result);
   write_diagnostics_csv(files.diagnostics_csv, result);
-  write_text(files.json, summary.dump(2) + "\n");
+  fem::write_text_file(files.json, summary.dump(2) + "\n");
   return files;
 }
 

@@ -2,6 +2,8 @@
 // see sensitivity.hpp.
 #include "calibration/sensitivity.hpp"
 
+#include "fem/text.hpp"
+
 #include <nlohmann/json.hpp>
 
 #include <cmath>
@@ -18,27 +20,8 @@ using Json = nlohmann::ordered_json;
 
 Json number_or_null(double value) { return std::isfinite(value) ? Json(value) : Json(nullptr); }
 
-std::string csv_number(double value) {
-  if (!std::isfinite(value)) return "nan";
-  std::ostringstream out;
-  out << std::setprecision(10) << value;
-  return out.str();
-}
 
-// A CSV cell: quoted when it holds a comma, a quote or a line break.
-std::string csv_text(const std::string& text) {
-  if (text.find_first_of(",\"\n") == std::string::npos) return text;
-  std::string quoted = "\"";
-  for (char c : text) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return quoted + "\"";
-}
 
-void write_file(const fs::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  if (!out) throw std::runtime_error("cannot write '" + path.string() + "'");
-  out << text;
-  if (!out) throw std::runtime_error("cannot write '" + path.string() + "'");
-}
 
 }  // namespace
 
@@ -163,26 +146,26 @@ std::vector<fs::path> write_sensitivity_tables(const SensitivityReport& report, 
   for (const auto& f : report.features) {
     for (std::size_t i = 0; i < report.parameter_names.size(); ++i) {
       const auto ii = static_cast<Eigen::Index>(i);
-      main << csv_text(f.feature) << "," << csv_text(f.info.group) << "," << csv_text(f.info.unit) << ","
-           << csv_text(report.parameter_names[i]) << ","
-           << csv_number(f.analysed ? f.indices.first_order[ii] : NAN) << ","
-           << csv_number(f.analysed ? f.indices.total_order[ii] : NAN) << ","
-           << csv_number(f.analysed ? f.indices.loo_error : NAN) << ","
-           << csv_number(f.analysed ? f.indices.corrected_loo_error : NAN) << "," << f.n_runs << ","
+      main << fem::csv_text(f.feature) << "," << fem::csv_text(f.info.group) << "," << fem::csv_text(f.info.unit) << ","
+           << fem::csv_text(report.parameter_names[i]) << ","
+           << fem::number_text(f.analysed ? f.indices.first_order[ii] : NAN, 10) << ","
+           << fem::number_text(f.analysed ? f.indices.total_order[ii] : NAN, 10) << ","
+           << fem::number_text(f.analysed ? f.indices.loo_error : NAN, 10) << ","
+           << fem::number_text(f.analysed ? f.indices.corrected_loo_error : NAN, 10) << "," << f.n_runs << ","
            << f.degree << "," << f.n_terms << "\n";
       if (!f.analysed) continue;
       for (std::size_t j = i + 1; j < report.parameter_names.size(); ++j) {
-        second << csv_text(f.feature) << "," << csv_text(report.parameter_names[i]) << ","
-               << csv_text(report.parameter_names[j]) << ","
-               << csv_number(f.indices.second_order(ii, static_cast<Eigen::Index>(j))) << "\n";
+        second << fem::csv_text(f.feature) << "," << fem::csv_text(report.parameter_names[i]) << ","
+               << fem::csv_text(report.parameter_names[j]) << ","
+               << fem::number_text(f.indices.second_order(ii, static_cast<Eigen::Index>(j)), 10) << "\n";
       }
     }
   }
   const std::vector<fs::path> paths = {folder / (stem + "_sobol.csv"), folder / (stem + "_sobol_second_order.csv"),
                                        folder / (stem + "_sensitivity.json")};
-  write_file(paths[0], main.str());
-  write_file(paths[1], second.str());
-  write_file(paths[2], sensitivity_json(report));
+  fem::write_text_file(paths[0], main.str());
+  fem::write_text_file(paths[1], second.str());
+  fem::write_text_file(paths[2], sensitivity_json(report));
   return paths;
 }
 

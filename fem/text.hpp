@@ -1,8 +1,9 @@
-// Small text helpers shared by the file readers (config, units, signal files, study
-// files): trimming, lower case, splitting a delimited line and a locale-independent
-// number parse.
+// Small text helpers shared by the file readers and writers (config, units, signal
+// files, study and calibration results): trimming, lower case, splitting a delimited
+// line, a locale-independent number parse; CSV cells, numbers as text, a text file.
 #pragma once
 
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -20,5 +21,15 @@ std::vector<std::string> split_fields(const std::string& line, char delimiter = 
 // Locale-independent parse of a whole field (std::from_chars, an optional leading '+');
 // false unless the field is exactly one finite number.
 bool parse_number(const std::string& field, double& value);
+
+// A CSV cell: `text` as is, or in quotes (a quote doubled) when it holds a comma, a
+// quote or a line break.
+std::string csv_text(const std::string& text);
+
+// `value` with `precision` significant digits ("nan" for NaN and infinities).
+std::string number_text(double value, int precision = 17);
+
+// Writes `text` to `path` (binary, replacing the file); throws std::runtime_error naming it.
+void write_text_file(const std::filesystem::path& path, const std::string& text);
 
 }  // namespace rsw::fem

@@ -13,6 +13,8 @@
 #include "calibration/signal.hpp"
 #include "calibration/study.hpp"
 
+#include "fem/text.hpp"
+
 #include "fem/units.hpp"
 
 #include <nlohmann/json.hpp>
@@ -58,19 +60,7 @@ cal::Study load_study(const StudyOptions& options) {
   return study;
 }
 
-std::string csv_number(double value) {
-  if (!std::isfinite(value)) return "nan";
-  std::ostringstream out;
-  out << std::setprecision(17) << value;
-  return out.str();
-}
 
-std::string csv_text(const std::string& text) {
-  if (text.find_first_of(",\"\n") == std::string::npos) return text;
-  std::string quoted = "\"";
-  for (char c : text) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return quoted + "\"";
-}
 
 const char* status_name(cal::StudyResults::Status status) {
   switch (status) {
@@ -106,35 +96,35 @@ std::vector<fs::path> write_run_tables(const cal::Study& study, const cal::Study
   std::ostringstream csv;
   csv << "index,status,wall_time_s,rank";
   for (std::size_t j = 0; j < names.size(); ++j) {
-    csv << "," << csv_text(names[j] + " [" + study.parameter_space().parameter(j).unit + "]");
+    csv << "," << fem::csv_text(names[j] + " [" + study.parameter_space().parameter(j).unit + "]");
   }
   for (const auto& name : features) {
     const std::string unit = cal::describe_feature(name).unit;
-    csv << "," << csv_text(unit.empty() ? name : name + " [" + unit + "]");
+    csv << "," << fem::csv_text(unit.empty() ? name : name + " [" + unit + "]");
   }
   csv << ",failure_reason,undefined_features,warnings\n";
   Json runs = Json::array();
   for (std::size_t i = 0; i < results.n_points(); ++i) {
     const auto ii = static_cast<Eigen::Index>(i);
-    csv << i << "," << status_name(results.status[i]) << "," << csv_number(results.wall_time[ii]) << ","
+    csv << i << "," << status_name(results.status[i]) << "," << fem::number_text(results.wall_time[ii]) << ","
         << results.rank[i];
     Json theta = Json::object(), y = Json::object(), undefined = Json::object();
     std::string undefined_names;
     for (std::size_t j = 0; j < names.size(); ++j) {
-      csv << "," << csv_number(results.points(ii, static_cast<Eigen::Index>(j)));
+      csv << "," << fem::number_text(results.points(ii, static_cast<Eigen::Index>(j)));
       theta[names[j]] = results.points(ii, static_cast<Eigen::Index>(j));
     }
     for (std::size_t k = 0; k < features.size(); ++k) {
       const double value = results.features(ii, static_cast<Eigen::Index>(k));
-      csv << "," << csv_number(value);
+      csv << "," << fem::number_text(value);
       y[features[k]] = std::isfinite(value) ? Json(value) : Json(nullptr);
       if (results.status[i] == cal::StudyResults::Status::ok && std::isnan(value)) {
         undefined_names += (undefined_names.empty() ? "" : " ") + features[k];
         undefined[features[k]] = undefined_feature_reason(features[k]);
       }
     }
-    csv << "," << csv_text(results.failure_reasons[i]) << "," << csv_text(undefined_names) << ","
-        << csv_text(results.warnings[i]) << "\n";
+    csv << "," << fem::csv_text(results.failure_reasons[i]) << "," << fem::csv_text(undefined_names) << ","
+        << fem::csv_text(results.warnings[i]) << "\n";
     Json run = {{"index", i}, {"status", status_name(results.status[i])}, {"theta", theta}, {"features", y}};
     run["wall_time"] = std::isfinite(results.wall_time[ii]) ? Json(results.wall_time[ii]) : Json(nullptr);
     if (results.status[i] == cal::StudyResults::Status::failed) run["failure_reason"] = results.failure_reasons[i];
