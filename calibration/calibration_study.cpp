@@ -254,6 +254,9 @@ void declare_calibration_keys(fem::ConfigSchema& s) {
   s.choice("calibration.emulator.trend", {"constant", "diagonal_quadratic", "full_quadratic"})
       .default_value("diagonal_quadratic")
       .doc("Mean function of each feature's GP.");
+  s.number("calibration.emulator.warping_width", "1", "1").default_value(shortest(emulator.warping_width))
+      .range(Range::closed(0, 1e6))
+      .doc("Each GP learns asinh((y - mean)/w), w this many standard errors of the observed mean; 0: y itself.");
 
   s.section("calibration.posterior", "Sampling-importance-resampling of the prior pool (Smith & Gelfand 1992).");
   s.integer("calibration.posterior.n_samples").default_value("4000").range(Range::closed(10, 10000000))
@@ -376,6 +379,7 @@ CalibrationSettings read_calibration_settings(const Study& study) {
   emulator.pool_size = c.integer("calibration.emulator.pool_size");
   emulator.smc.n_particles = c.integer("calibration.emulator.particles");
   emulator.seed = static_cast<std::uint64_t>(c.integer("calibration.emulator.seed"));
+  emulator.warping_width = c.number("calibration.emulator.warping_width");
   const std::string emulator_trend = c.text("calibration.emulator.trend");
   emulator.gp.trend = emulator_trend == "constant"             ? TrendType::Constant
                       : emulator_trend == "diagonal_quadratic" ? TrendType::DiagonalQuadratic

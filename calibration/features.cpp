@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
 #include <sstream>
 
 namespace rsw::calibration {
@@ -96,13 +97,16 @@ void add_resistance_features(const Signal& signal, const WeldStage& stage, doubl
   value[f::time_gamma] = t_e - stage.start;
   value[f::resistance_mean] = window.mean();
 
-  const CurvePoint beta = window.maximum();
-  const bool at_start = beta.time <= t_s + tolerance;
-  if (at_start || beta.time >= t_e - tolerance) {
+  // β: the highest point after the falling start (if any) ends at its first minimum.
+  const std::optional<CurvePoint> valley = window.first_minimum();
+  const bool falls_throughout = !valley || valley->time >= t_e - tolerance;
+  const CurvePoint beta = falls_throughout ? window.maximum() : window.trimmed(valley->time, t_e).maximum();
+  const bool rises_at_end = !falls_throughout && beta.time >= t_e - tolerance;
+  if (falls_throughout || beta.time <= valley->time + tolerance || rises_at_end) {
     const std::string why =
         "the dynamic resistance has no peak inside the trimmed weld stage [" + milliseconds(t_s - stage.start) +
-        ", " + milliseconds(t_e - stage.start) + "]; its maximum is at the " +
-        (at_start ? "start: it falls from the start" : "end: it still rises at the end");
+        ", " + milliseconds(t_e - stage.start) + "]; " +
+        (rises_at_end ? "its maximum is at the end: it still rises at the end" : "it falls over the whole stage");
     for (const char* name : {f::resistance_beta, f::time_beta, f::resistance_alpha, f::time_alpha,
                              f::slope_before_peak, f::slope_after_peak, f::resistance_rise, f::resistance_drop}) {
       reason[name] = why;
@@ -112,7 +116,7 @@ void add_resistance_features(const Signal& signal, const WeldStage& stage, doubl
     value[f::time_beta] = beta.time - stage.start;
     value[f::slope_after_peak] = (r_gamma - beta.value) / (t_e - beta.time);
     value[f::resistance_drop] = r_gamma - beta.value;
-    const CurvePoint steepest = window.trimmed(t_s, beta.time).maximum_slope();
+    const CurvePoint steepest = window.trimmed(valley->time, beta.time).maximum_slope();
     if (!(steepest.value > 0)) {
       const std::string why = "the dynamic resistance does not rise before its peak at " +
                               milliseconds(beta.time - stage.start) + ", so it has no first inflection";

@@ -27,9 +27,12 @@
 //    current pauses are rejected). The curve covers the weld stage; trimming 2 ms at
 //    each end gives the analysis window [t_s, t_e] = [t_ws + 2 ms, t_we − 2 ms]. After
 //    El Ouafi et al. (2012):
-//      β: global maximum of R on the window (R_beta, t_beta); it must lie strictly inside
-//         (else β is undefined, see "Undefined features" below);
-//      α: first inflection, defined as the point of steepest rise dR/dt on [t_s, t_β]
+//      β: the peak, the maximum of R on [t_v, t_e], where t_v ends a falling start: t_s
+//         if R does not fall at t_s, else R's first local minimum (the curve's local
+//         extremes, so a cold start resistance above the peak does not hide it). It
+//         must lie strictly inside (else β is undefined, see "Undefined features");
+//         R_beta varies continuously with the data where the peak is unique;
+//      α: first inflection, defined as the point of steepest rise dR/dt on [t_v, t_β]
 //         (the maximum of the smoothed slope, located on the curve; if the slope is
 //         largest at t_s the inflection lies before the window and α = t_s). It must
 //         have dR/dt > 0 (a rising part before the peak), else α is undefined;
@@ -56,10 +59,10 @@
 // features without a definition; those, and only those, are reported as NaN with the
 // reason, and every other feature keeps its value (a study or calibration decides per
 // feature what to do with a NaN, instead of losing the whole weld):
-//   - no resistance peak inside [t_s, t_e] (the maximum is at t_s: R falls from the
-//     start; or at t_e: R still rises at the end): R_beta, t_beta, R_alpha, t_alpha,
-//     m_1, m_2, dR_1, dR_2 are undefined; R_gamma, t_gamma and R_m are defined;
-//   - an interior peak but no rise before it (max dR/dt ≤ 0 on [t_s, t_β]): R_alpha,
+//   - no resistance peak inside [t_s, t_e] (R falls over the whole window, or its
+//     maximum after t_v is at t_e: R still rises at the end): R_beta, t_beta, R_alpha,
+//     t_alpha, m_1, m_2, dR_1, dR_2 are undefined; R_gamma, t_gamma and R_m are defined;
+//   - an interior peak but no rise before it (max dR/dt ≤ 0 on [t_v, t_β]): R_alpha,
 //     t_alpha, m_1, dR_1 are undefined;
 //   - S does not rise after t_ws + 2 ms (its maximum is there): S_dot_exp (a slope over
 //     an empty expansion phase) is undefined; dS_P = 0 (no expansion is a measured

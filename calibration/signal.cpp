@@ -12,6 +12,7 @@
 #include <charconv>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <utility>
 
@@ -370,6 +371,21 @@ CurvePoint SmoothCurve::maximum_slope() const {
     consider(t_k + x1, evaluate_cubic_slope(c, x1));
   });
   return best;
+}
+
+std::optional<CurvePoint> SmoothCurve::first_minimum() const {
+  if (slope(begin_) >= 0) return CurvePoint{begin_, value(begin_)};
+  std::optional<CurvePoint> found;
+  for_each_piece([&](Eigen::Index, double t_k, const Eigen::Vector4d& c, double x0, double x1) {
+    if (found) return;
+    // Critical points p'(x) = 0 with p''(x) > 0, the earliest in the piece first.
+    double first = std::numeric_limits<double>::infinity();
+    for (double x : quadratic_roots(3 * c[3], 2 * c[2], c[1], step_)) {
+      if (x > x0 && x <= x1 && 2 * c[2] + 6 * c[3] * x > 0) first = std::min(first, x);
+    }
+    if (std::isfinite(first)) found = CurvePoint{t_k + first, evaluate_cubic(c, first)};
+  });
+  return found;
 }
 
 double SmoothCurve::mean() const {

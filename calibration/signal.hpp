@@ -24,6 +24,7 @@
 
 #include <Eigen/Core>
 
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -145,6 +146,10 @@ class SmoothCurve {
   CurvePoint maximum() const;
   // Point of steepest rise over the domain: the maximum of the slope.
   CurvePoint maximum_slope() const;
+  // End of a falling start: begin() if the curve does not fall there (slope ≥ 0), else
+  // its first local minimum (slope turning from negative to positive); none if it
+  // falls over the whole domain.
+  std::optional<CurvePoint> first_minimum() const;
   // (1 / (end − begin)) ∫ y dt.
   double mean() const;
   // Slope of the least-squares straight line through the curve over the domain:

@@ -19,6 +19,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <optional>
 #include <limits>
 #include <random>
 #include <sstream>
@@ -251,6 +252,31 @@ TEST(SmoothCurve, ReproducesCubicBetweenSamplesWithExtremaOffTheGrid) {
   EXPECT_THROW(curve.trimmed(-0.1, 0.5), SignalError);
 }
 
+TEST(SmoothCurve, FirstMinimumEndsAFallingStartAndIsAbsentWhenTheCurveOnlyFalls) {
+  // y = −(t − 0.37)² (t − 2): falls on [0, 0.37), minimum at 0.37 (between samples
+  // 0.3 and 0.4), rises to 4.37/3, falls after it.
+  auto y = [](double t) { return -(t - 0.37) * (t - 0.37) * (t - 2); };
+  auto dy = [](double t) { return -(2 * (t - 0.37) * (t - 2) + (t - 0.37) * (t - 0.37)); };
+  const double step = 0.1;
+  const int n = 25;
+  Eigen::VectorXd values(n), slopes(n);
+  for (int i = 0; i < n; ++i) {
+    values[i] = y(i * step);
+    slopes[i] = dy(i * step);
+  }
+  const SmoothCurve curve(0, step, values, slopes);
+  const std::optional<CurvePoint> valley = curve.first_minimum();
+  ASSERT_TRUE(valley.has_value());
+  EXPECT_NEAR(valley->time, 0.37, 1e-12);
+  EXPECT_NEAR(valley->value, 0.0, 1e-14);
+  // Rising at its start: the start itself.
+  const std::optional<CurvePoint> rising = curve.trimmed(0.6, 2.0).first_minimum();
+  ASSERT_TRUE(rising.has_value());
+  EXPECT_DOUBLE_EQ(rising->time, 0.6);
+  // Falling over the whole domain [1.6, 2.4] (after the maximum at 4.37/3): none.
+  EXPECT_FALSE(curve.trimmed(1.6, 2.4).first_minimum().has_value());
+}
+
 TEST(WeldStage, CrossingTimesAreInterpolatedBetweenSamples) {
   const Signal signal = synthetic_weld(ResistanceShape{});
   const WeldStage half = find_weld_stage(signal, 0.5);
@@ -391,7 +417,7 @@ TEST(DynamicResistance, FallingResistanceLeavesPeakFeaturesUndefinedWithReasonAn
     const std::string reason = features.undefined_reason(name);
     EXPECT_NE(reason.find("the dynamic resistance has no peak inside the trimmed weld stage [2 ms, 98 ms]"),
               std::string::npos) << name << ": " << reason;
-    EXPECT_NE(reason.find("its maximum is at the start"), std::string::npos) << reason;
+    EXPECT_NE(reason.find("it falls over the whole stage"), std::string::npos) << reason;
     EXPECT_EQ(reason.rfind(why_undefined(f::resistance_beta), 0), 0u) << reason;  // the general condition first
   }
   // R_gamma, t_gamma and R_m do not need a peak: their closed-form values.
@@ -409,6 +435,27 @@ TEST(DynamicResistance, FallingResistanceLeavesPeakFeaturesUndefinedWithReasonAn
   // The other groups are untouched.
   EXPECT_TRUE(std::isfinite(features.at(f::displacement_expansion_rate)));
   EXPECT_TRUE(std::isfinite(features.at(f::cooling_rate)));
+}
+
+TEST(DynamicResistance, PeakBelowAFallingStartIsTheMaximumAfterTheFirstMinimum) {
+  // R = r0 + k (s² u − u³/3), u = τ − τ_a: minimum at u = −s, peak r0 + (2/3) k s³ at
+  // u = s, steepest rise r0 at u = 0. With s = 20 ms and τ_a = 50 ms the window
+  // [2, 98] ms starts at u = −48 ms < −2s, where R is above the peak (R(−2s) equals
+  // it): a cold start resistance above the β peak, common on real welds. The cubic
+  // passes the smoothing unchanged, so the features take their closed-form values.
+  ResistanceShape dip;
+  dip.s = 20e-3;
+  dip.tau_a = 50e-3;
+  const FeatureValues features = extract_features(synthetic_weld(dip), half_current_threshold());
+  namespace f = feature_name;
+  ASSERT_GT(dip.value(2e-3), dip.value(dip.tau_a + dip.s));  // the start lies above the peak
+  EXPECT_TRUE(features.undefined().empty());
+  const double r_beta = dip.r0 + 2.0 / 3.0 * dip.k * dip.s * dip.s * dip.s;
+  expect_relative(features.at(f::resistance_beta), r_beta, 1e-9, "R_beta");
+  EXPECT_NEAR(features.at(f::time_beta), dip.tau_a + dip.s, 1e-9);
+  expect_relative(features.at(f::resistance_alpha), dip.r0, 1e-9, "R_alpha");
+  EXPECT_NEAR(features.at(f::time_alpha), dip.tau_a, 1e-9);
+  expect_relative(features.at(f::resistance_rise), r_beta - dip.r0, 1e-8, "dR_1");
 }
 
 TEST(DynamicResistance, ResistanceStillRisingAtTheEndHasNoPeakAndSaysSo) {
