@@ -256,7 +256,13 @@ void declare_calibration_keys(fem::ConfigSchema& s) {
       .doc("Mean function of each feature's GP.");
   s.number("calibration.emulator.warping_width", "1", "1").default_value(shortest(emulator.warping_width))
       .range(Range::closed(0, 1e6))
-      .doc("Each GP learns asinh((y - mean)/w), w this many standard errors of the observed mean; 0: y itself.");
+      .doc("GPs learn asinh((y - mean)/w), w in standard errors of the observed mean; 0: off.");
+  s.integer("calibration.emulator.noise_pairs").default_value(std::to_string(emulator.noise_pairs))
+      .range(Range::closed(0, 100000))
+      .doc("Near-duplicates of the best runs; their differences bound each GP's nugget.");
+  s.number("calibration.emulator.noise_pair_distance", "1", "1").default_value(shortest(emulator.noise_pair_distance))
+      .range(Range{0.0, 0.5, false, false})
+      .doc("Their distance in the unit cube.");
 
   s.section("calibration.posterior", "Sampling-importance-resampling of the prior pool (Smith & Gelfand 1992).");
   s.integer("calibration.posterior.n_samples").default_value("4000").range(Range::closed(10, 10000000))
@@ -380,6 +386,8 @@ CalibrationSettings read_calibration_settings(const Study& study) {
   emulator.smc.n_particles = c.integer("calibration.emulator.particles");
   emulator.seed = static_cast<std::uint64_t>(c.integer("calibration.emulator.seed"));
   emulator.warping_width = c.number("calibration.emulator.warping_width");
+  emulator.noise_pairs = c.integer("calibration.emulator.noise_pairs");
+  emulator.noise_pair_distance = c.number("calibration.emulator.noise_pair_distance");
   const std::string emulator_trend = c.text("calibration.emulator.trend");
   emulator.gp.trend = emulator_trend == "constant"             ? TrendType::Constant
                       : emulator_trend == "diagonal_quadratic" ? TrendType::DiagonalQuadratic

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <random>
 #include <sstream>
 #include <stdexcept>
 #include <utility>
@@ -34,20 +35,25 @@ struct Runs {
   std::vector<Eigen::VectorXd> failed;
   int n_evaluations = 0;
 
-  void add(const std::vector<Eigen::VectorXd>& thetas, const std::vector<std::optional<Eigen::VectorXd>>& values,
-           Eigen::Index n_features) {
+  // Returns, per point, its row among the successful points (−1 if it failed).
+  std::vector<Eigen::Index> add(const std::vector<Eigen::VectorXd>& thetas,
+                                const std::vector<std::optional<Eigen::VectorXd>>& values, Eigen::Index n_features) {
     if (values.size() != thetas.size())
       throw std::runtime_error("emulator calibration: the evaluator returned " + std::to_string(values.size()) +
                                " results for " + std::to_string(thetas.size()) + " points");
+    std::vector<Eigen::Index> rows;
     for (std::size_t k = 0; k < thetas.size(); ++k) {
       ++n_evaluations;
       if (values[k] && values[k]->size() == n_features && values[k]->allFinite()) {
+        rows.push_back(static_cast<Eigen::Index>(points.size()));
         points.push_back(thetas[k]);
         features.push_back(*values[k]);
       } else {
+        rows.push_back(-1);
         failed.push_back(thetas[k]);
       }
     }
+    return rows;
   }
 
   Eigen::MatrixXd point_matrix() const { return stack(points); }
@@ -89,6 +95,36 @@ Eigen::MatrixXd choose_batch(FeatureEmulator emulator, const Eigen::MatrixXd& ca
   return chosen;
 }
 
+// Near-duplicates of the `count` successful runs with the highest emulated
+// log-likelihood: each `distance` away in a uniformly random direction, reflected
+// into the unit cube.
+std::vector<Eigen::VectorXd> noise_partners(const Eigen::MatrixXd& points, const Eigen::VectorXd& log_likelihood,
+                                            int count, double distance, std::uint64_t seed,
+                                            std::vector<Eigen::Index>& originals) {
+  std::vector<Eigen::Index> order(static_cast<std::size_t>(points.rows()));
+  for (std::size_t k = 0; k < order.size(); ++k) order[k] = static_cast<Eigen::Index>(k);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](Eigen::Index a, Eigen::Index b) { return log_likelihood(a) > log_likelihood(b); });
+  std::mt19937_64 generator(seed);
+  std::normal_distribution<double> normal;
+  std::vector<Eigen::VectorXd> partners;
+  originals.clear();
+  for (int k = 0; k < count && k < static_cast<int>(order.size()); ++k) {
+    const Eigen::Index row = order[static_cast<std::size_t>(k)];
+    Eigen::VectorXd direction(points.cols());
+    for (Eigen::Index i = 0; i < direction.size(); ++i) direction(i) = normal(generator);
+    Eigen::VectorXd partner = points.row(row).transpose() + distance * direction.normalized();
+    for (Eigen::Index i = 0; i < partner.size(); ++i) {
+      if (partner(i) < 0.0) partner(i) = -partner(i);
+      if (partner(i) > 1.0) partner(i) = 2.0 - partner(i);
+      partner(i) = std::clamp(partner(i), 0.0, 1.0);
+    }
+    partners.push_back(partner);
+    originals.push_back(row);
+  }
+  return partners;
+}
+
 }  // namespace
 
 GaussianProcessOptions EmulatorCalibrationOptions::default_gp() {
@@ -110,6 +146,8 @@ EmulatorCalibration::EmulatorCalibration(int dimension, BatchFeatureFunction eva
   if (options_.n_consecutive < 1) throw std::invalid_argument("EmulatorCalibration: n_consecutive must be >= 1");
   if (!(options_.influence_tolerance > 0.0) || !(options_.quantile_tolerance > 0.0))
     throw std::invalid_argument("EmulatorCalibration: tolerances must be positive");
+  if (options_.noise_pairs < 0 || !(options_.noise_pair_distance > 0.0 && options_.noise_pair_distance < 0.5))
+    throw std::invalid_argument("EmulatorCalibration: noise_pairs must be >= 0 and noise_pair_distance in (0, 0.5)");
   if (options_.initial_design && options_.initial_design->cols() != dimension_)
     throw std::invalid_argument("EmulatorCalibration: the initial design has " +
                                 std::to_string(options_.initial_design->cols()) + " columns, the problem " +
@@ -152,6 +190,7 @@ EmulatorCalibrationResult EmulatorCalibration::run() const {
     warping.width = options_.warping_width * emulated.mean_variances().cwiseSqrt();
   }
   std::optional<FeatureEmulator> emulator;
+  NoisePairs noise_pairs;
   int consecutive = 0, previous_points = 0;
   const std::vector<double> probabilities{0.05, 0.5, 0.95};
   for (int iteration = 0;; ++iteration) {
@@ -162,7 +201,9 @@ EmulatorCalibrationResult EmulatorCalibration::run() const {
     it.n_evaluations = runs.n_evaluations;
     GaussianProcessOptions gp = options_.gp;
     gp.seed = options_.seed * 7919 + static_cast<std::uint64_t>(iteration) * 104729;
-    emulator = FeatureEmulator(runs.point_matrix(), runs.feature_matrix(), gp, emulator ? &*emulator : nullptr, warping);
+    it.n_noise_pairs = static_cast<int>(noise_pairs.size());
+    emulator = FeatureEmulator(runs.point_matrix(), runs.feature_matrix(), gp, emulator ? &*emulator : nullptr, warping,
+                               noise_pairs);
     const FeatureEmulator& current = *emulator;
     const BatchLogDensity log_likelihood = [&](const Eigen::MatrixXd& points) {
       return emulated.log_likelihood(current.predict(points));
@@ -259,11 +300,32 @@ EmulatorCalibrationResult EmulatorCalibration::run() const {
     }
     it.chosen_points = choose_batch(current, sampled.particles, runs.failed, irreducible,
                                     std::min(options_.batch_size, room));
+    // Noise pairs, once, with the first batch.
+    std::vector<Eigen::Index> originals;
+    if (iteration == 0 && options_.noise_pairs > 0) {
+      const int count = std::min(options_.noise_pairs, room - static_cast<int>(it.chosen_points.rows()));
+      const Eigen::MatrixXd points = runs.point_matrix();
+      FeaturePrediction at_runs = current.predict(points);
+      at_runs.latent_variance.setZero();
+      const std::vector<Eigen::VectorXd> partners =
+          noise_partners(points, emulated.log_likelihood(at_runs), count, options_.noise_pair_distance,
+                         options_.seed * 41 + 7, originals);
+      if (!partners.empty()) {
+        const Eigen::Index n_chosen = it.chosen_points.rows();
+        it.chosen_points.conservativeResize(n_chosen + static_cast<Eigen::Index>(partners.size()), Eigen::NoChange);
+        for (std::size_t k = 0; k < partners.size(); ++k)
+          it.chosen_points.row(n_chosen + static_cast<Eigen::Index>(k)) = partners[k].transpose();
+      }
+    }
     it.seconds = std::chrono::duration<double>(Clock::now() - start).count();
     if (options_.on_iteration) options_.on_iteration(it);
     result.history.push_back(it);
     const std::vector<Eigen::VectorXd> thetas = rows_of(it.chosen_points);
-    runs.add(thetas, evaluate_(thetas), p);
+    const std::vector<Eigen::Index> rows = runs.add(thetas, evaluate_(thetas), p);
+    const std::size_t first_partner = thetas.size() - originals.size();
+    for (std::size_t k = 0; k < originals.size(); ++k) {
+      if (rows[first_partner + k] >= 0) noise_pairs.emplace_back(originals[k], rows[first_partner + k]);
+    }
   }
 
   result.n_evaluations = runs.n_evaluations;

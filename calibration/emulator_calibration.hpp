@@ -37,6 +37,9 @@
 // the rule of Loeppky, Sacks & Welch 2009, "Choosing the sample size of a computer
 // experiment"), or the given points. A failed run stays out of the emulators; its point
 // is believed into them for step 4 only, so no later batch returns to it.
+// Noise pairs (optional, noise_pairs > 0): a rough feature (reproducible numerical
+// noise at scales no design resolves) gets a nugget of at least the variance its
+// near-duplicate runs show, instead of an interpolating GP that stays uncertain.
 // Warnings (with what to do) name: a stop without convergence and the check that
 // failed, a feature whose numerical noise τ_j exceeds the data's standard error √(V_j/N)
 // (the posterior then shows the model's noise, and is wider than the data alone allow),
@@ -81,6 +84,12 @@ struct EmulatorCalibrationOptions {
   // Each feature's GP learns asinh((y − Ȳ_j)/w_j), w_j = warping_width · √(V_j/N)
   // (feature_emulator.hpp, "Warping"); 0: the features themselves.
   double warping_width = 0.0;
+  // After the initial design, this many near-duplicates of the best runs so far (by the
+  // emulated likelihood), each noise_pair_distance away in a random direction, are run
+  // with the first batch; their differences bound each feature's nugget from below
+  // (feature_emulator.hpp, NoisePairs). 0: none.
+  int noise_pairs = 0;
+  double noise_pair_distance = 0.005;  // in the unit cube
   std::uint64_t seed = 1;
   std::optional<Eigen::MatrixXd> initial_design;  // rows in [0,1]^d, replaces the Latin hypercube
   std::function<void(const EmulatorIteration&)> on_iteration;  // progress, after each iteration's checks
@@ -93,6 +102,7 @@ struct EmulatorIteration {
   int n_points = 0;          // successful runs in the emulators
   int n_failed = 0;          // failed runs so far
   int n_evaluations = 0;     // all runs so far
+  int n_noise_pairs = 0;     // noise pairs that bound the nuggets
   double log_evidence = 0.0;            // ln Z̃ (importance sampling)
   double evidence_relative_error = 0.0; // SE(Z̃)/Z̃
   double smc_log_evidence = 0.0;        // ln Z̃ of the tempered SMC, a check

@@ -12,13 +12,17 @@ namespace rsw::calibration {
 
 FeatureEmulator::FeatureEmulator(const Eigen::MatrixXd& inputs, const Eigen::MatrixXd& features,
                                  const GaussianProcessOptions& options, const FeatureEmulator* previous,
-                                 FeatureWarping warping)
+                                 FeatureWarping warping, const NoisePairs& pairs)
     : warping_(std::move(warping)) {
   if (inputs.rows() != features.rows())
     throw std::invalid_argument("FeatureEmulator: " + std::to_string(inputs.rows()) + " points but " +
                                 std::to_string(features.rows()) + " feature rows");
   if (inputs.rows() < 2) throw std::invalid_argument("FeatureEmulator: at least two runs are needed");
   if (!features.allFinite()) throw std::invalid_argument("FeatureEmulator: feature values must be finite");
+  for (const auto& [a, b] : pairs) {
+    if (a < 0 || b < 0 || a >= inputs.rows() || b >= inputs.rows() || a == b)
+      throw std::invalid_argument("FeatureEmulator: a noise pair names a row outside the inputs");
+  }
   if (previous != nullptr && previous->n_features() != features.cols())
     throw std::invalid_argument("FeatureEmulator: the previous emulator has another number of features");
   const Eigen::Index p = features.cols();
@@ -38,7 +42,14 @@ FeatureEmulator::FeatureEmulator(const Eigen::MatrixXd& inputs, const Eigen::Mat
     scales_(j) = variance > 0.0 ? std::sqrt(variance) : std::max(std::abs(mean), 1.0);
     GaussianProcessOptions feature_options = options;
     feature_options.seed = options.seed + static_cast<std::uint64_t>(j);
-    GaussianProcessRegression regression(inputs, (column.array() - mean).matrix() / scales_(j), feature_options);
+    const Eigen::VectorXd outputs = (column.array() - mean).matrix() / scales_(j);
+    if (!pairs.empty()) {
+      double floor = 0.0;
+      for (const auto& [a, b] : pairs) floor += 0.5 * (outputs(a) - outputs(b)) * (outputs(a) - outputs(b));
+      floor /= static_cast<double>(pairs.size());
+      feature_options.nugget_floor_absolute = std::max(feature_options.nugget_floor_absolute, floor);
+    }
+    GaussianProcessRegression regression(inputs, outputs, feature_options);
     if (previous != nullptr) {
       const GaussianProcess& before = previous->processes_[static_cast<std::size_t>(j)];
       GaussianProcessHyperparameters warm = before.hyperparameters();

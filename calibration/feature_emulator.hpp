@@ -40,6 +40,7 @@
 
 #include <Eigen/Core>
 
+#include <utility>
 #include <vector>
 
 namespace rsw::calibration {
@@ -55,12 +56,23 @@ struct FeatureWarping {
   Eigen::VectorXd centre, width;
 };
 
+// Rows (a, b) of the inputs that are near-duplicates (a noise pair: points a small
+// distance δ apart). A smooth feature differs by O(δ) between them; what a rough one
+// adds (a mesh's contact jumps, say) does not shrink with δ. The mean of
+// (o_a − o_b)²/2 over the pairs, o the GP's standardised output, is then an estimate
+// of the noise variance that bounds each feature's nugget τ_j² from below: a design
+// too sparse to see the roughness otherwise lets the likelihood choose τ_j ≈ 0 and
+// explain it by short length scales and a large emulator variance. The smooth part
+// adds about δ² |∇y|²/(2d) to the bound, negligible for a small δ.
+using NoisePairs = std::vector<std::pair<Eigen::Index, Eigen::Index>>;
+
 class FeatureEmulator {
  public:
   // inputs: n × d unit-cube points; features: n × p finite values. `previous` (same p),
   // if given, warm-starts each feature's hyperparameter search.
+  // `pairs`, if any, give each feature's nugget floor (NoisePairs above).
   FeatureEmulator(const Eigen::MatrixXd& inputs, const Eigen::MatrixXd& features, const GaussianProcessOptions& options,
-                  const FeatureEmulator* previous = nullptr, FeatureWarping warping = {});
+                  const FeatureEmulator* previous = nullptr, FeatureWarping warping = {}, const NoisePairs& pairs = {});
 
   FeaturePrediction predict(const Eigen::MatrixXd& points) const;
   // The same hyperparameters conditioned on one more point at each feature's own mean

@@ -11,6 +11,8 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <optional>
 #include <random>
 
 namespace rsw::calibration {
@@ -124,6 +126,65 @@ TEST(EmulatorCalibration, RecoversTheClosedFormPosteriorAndEvidenceOfALinearMode
     EXPECT_NEAR(mean(j), problem.mode(j), 0.1 * problem.posterior_sd(j)) << "parameter " << j;
     EXPECT_NEAR(std::sqrt(variance), problem.posterior_sd(j), 0.1 * problem.posterior_sd(j)) << "parameter " << j;
   }
+}
+
+
+// A rough feature: y = 1 + 2 u_0 + a h(u), h a hash of u's bits, uniform on [−1, 1] and
+// independent between distinct points (variance 1/3), beside a smooth one y = 1 + 2 u_1.
+// For a pair of points δ apart, E[(y_a − y_b)²]/2 = a²/3 + O(δ²), so the noise pairs
+// bound the rough feature's nugget near a²/3 and the smooth one's near δ².
+double hash_noise(const Eigen::VectorXd& u) {
+  std::uint64_t state = 0x9E3779B97F4A7C15ull;
+  for (Eigen::Index i = 0; i < u.size(); ++i) {
+    std::uint64_t bits = 0;
+    const double value = u(i);
+    std::memcpy(&bits, &value, sizeof bits);
+    state ^= bits + 0x9E3779B97F4A7C15ull + (state << 6) + (state >> 2);
+  }
+  std::mt19937_64 generator(state);
+  return std::uniform_real_distribution<double>(-1.0, 1.0)(generator);
+}
+
+TEST(FeatureEmulator, NoisePairsBoundEachNuggetByHalfTheirMeanSquaredDifference) {
+  // Four points, two pairs; standardised outputs o = (y − ȳ)/sd(y) with y = (0, 1, 2, 4):
+  // ȳ = 7/4, sd² = (49 + 9 + 1 + 81)/16/3 = 35/12; pairs (0,1), (2,3): differences 1 and 2
+  // in y, so the floor is ((1 + 4)/2)/2 / (35/12) = 3/7 in o units².
+  Eigen::MatrixXd inputs(4, 1);
+  inputs << 0.1, 0.4, 0.6, 0.9;
+  const Eigen::MatrixXd features = (Eigen::MatrixXd(4, 1) << 0.0, 1.0, 2.0, 4.0).finished();
+  const FeatureEmulator emulator(inputs, features, EmulatorCalibrationOptions::default_gp(), nullptr, {},
+                                 {{0, 1}, {2, 3}});
+  const double floor = (0.5 * (1.0 + 4.0) / 2.0) / (35.0 / 12.0);
+  EXPECT_GE(emulator.processes()[0].hyperparameters().noise_variance, floor * (1 - 1e-9));
+  EXPECT_THROW(FeatureEmulator(inputs, features, EmulatorCalibrationOptions::default_gp(), nullptr, {}, {{0, 4}}),
+               std::invalid_argument);
+}
+
+TEST(EmulatorCalibration, NoisePairsGiveARoughFeatureTheNuggetItsRoughnessImplies) {
+  const double amplitude = 0.1;
+  const BatchFeatureFunction model = [&](const std::vector<Eigen::VectorXd>& points) {
+    std::vector<std::optional<Eigen::VectorXd>> values;
+    for (const Eigen::VectorXd& u : points)
+      values.emplace_back(Eigen::Vector2d(1.0 + 2.0 * u(0) + amplitude * hash_noise(u), 1.0 + 2.0 * u(1)));
+    return values;
+  };
+  const Eigen::MatrixXd y = (Eigen::MatrixXd(1, 2) << 1.8, 2.2).finished();
+  const GaussianLikelihood likelihood({"rough", "smooth"}, y, ObservationNoise::given({{"rough", 0.05}, {"smooth", 0.05}}));
+  EmulatorCalibrationOptions options;
+  options.n_initial = 40;
+  options.noise_pairs = 30;
+  options.max_evaluations = 40 + 4 + 30;  // stops after the first batch and its pairs
+  const EmulatorCalibrationResult result = EmulatorCalibration(2, model, likelihood, options).run();
+  const EmulatorIteration& last = result.history.back();
+  EXPECT_EQ(last.n_noise_pairs, 30);
+  const double expected = amplitude / std::sqrt(3.0);  // relative sampling error of the variance about √(2/30) = 0.26
+  std::printf("noise sd: rough %.4g (expected %.4g), smooth %.4g\n", last.noise_standard_deviations(0), expected,
+              last.noise_standard_deviations(1));
+  EXPECT_GT(last.noise_standard_deviations(0), 0.7 * expected);
+  EXPECT_LT(last.noise_standard_deviations(0), 1.4 * expected);
+  // The smooth feature's pairs differ by its gradient: 2 δ v_1, v a random unit vector in
+  // two dimensions (E v_1² = 1/2), so E[(y_a − y_b)²]/2 = δ² and its τ is about δ.
+  EXPECT_NEAR(last.noise_standard_deviations(1), options.noise_pair_distance, 0.5 * options.noise_pair_distance);
 }
 
 }  // namespace
