@@ -45,6 +45,7 @@ struct CalibrateOptions {
   double run_timeout = 0;
   bool quiet = false;
   bool plots = true;
+  bool overwrite = false;
 };
 
 // --- posterior-predictive runs -----------------------------------------------------
@@ -191,10 +192,33 @@ void run_calibrate(const CalibrateOptions& options, const ForwardModelFactory& f
   calibration_options.farm.run_timeout = options.run_timeout;
   calibration_options.progress = options.quiet ? nullptr : &std::cerr;
   calibration_options.initial_runs = cal::load_initial_runs(study, settings);
-  if (!options.resume && fs::exists(calibration_folder) && !fs::is_empty(calibration_folder)) {
+  // The output folder (shared with the study's runs), then this calibration's own folder
+  // (exclusive: a second calibration into it is refused at once). The result files of
+  // an earlier session go first: a calibration that fails leaves none that look current.
+  fem::OutputFolder output_folder = claim_study_folder(study, "calibrate", options.overwrite);
+  const cal::CalibrationFiles result_files = cal::calibration_files(study);
+  std::vector<std::string> own_names = {calibration_folder.filename().string()};
+  for (const auto& file : {result_files.h5, result_files.posterior_csv, result_files.diagnostics_csv, result_files.json})
+    own_names.push_back(file.filename().string());
+  output_folder.check(own_names);
+  const auto holds_runs = [&] {  // anything but the marker
+    if (!fs::is_directory(calibration_folder)) return false;
+    for (const auto& entry : fs::directory_iterator(calibration_folder))
+      if (entry.path().filename() != fem::OutputFolder::marker_name) return true;
+    return false;
+  };
+  if (!options.resume && holds_runs()) {
     throw std::runtime_error("calibration folder '" + calibration_folder.string() +
                              "' exists already; continue the calibration with --resume, or remove it to start again");
   }
+  output_folder.record(own_names.front());
+  fem::OutputFolderOptions own_options;
+  own_options.kind = "calibrate";
+  own_options.overwrite = options.overwrite;
+  own_options.evidence = {"evaluations", "predictive", "predictive.h5"};  // of a version before the marker
+  const fem::OutputFolder own_folder(calibration_folder, own_options);
+  output_folder.clear({own_names.begin() + 1, own_names.end()});
+  for (auto name = own_names.begin() + 1; name != own_names.end(); ++name) output_folder.record(*name);
   if (!options.quiet) {
     std::cerr << "calibration " << study.name() << ": " << observations.values.rows() << " replicate"
               << (observations.values.rows() == 1 ? "" : "s") << " of " << observations.values.cols() << " feature"
@@ -299,7 +323,11 @@ void add_calibrate_command(CLI::App& app, ForwardModelFactory model_factory) {
   calibrate->add_option("--set", options->overrides, "Override a study key: --set key=value (repeatable)")
       ->take_all()
       ->allow_extra_args(false);
-  calibrate->add_option("-o,--output", options->output_dir, "Output folder (default: study.output of the study file)");
+  calibrate->add_option("-o,--output", options->output_dir,
+                        "Output folder (default: study.output of the study file): new, empty, or one rsw made before");
+  calibrate->add_flag("--overwrite", options->overwrite,
+                      "Write into a non-empty folder rsw did not make (rsw still removes and replaces only its own "
+                      "files)");
   calibrate->add_option("--workers", options->n_workers, "Worker processes per batch; 0: one per core")
       ->capture_default_str();
   calibrate->add_flag("--resume", options->resume,
