@@ -81,7 +81,8 @@ class PredictiveModel : public cal::ForwardModel {
 
 std::vector<cal::PredictiveRun> run_predictive(const cal::Study& study, const cal::ForwardModel& model,
                                           const cal::CalibrationResult& result, const cal::CalibrationSettings& settings,
-                                          const fs::path& calibration_folder, const cal::FarmOptions& farm_options) {
+                                          fem::OutputFolder& calibration_folder,
+                                          const cal::FarmOptions& farm_options) {
   std::vector<cal::PredictiveRun> runs;
   runs.push_back({"posterior_mean", result.mean, {}, {}, {}, {}});
   const Eigen::Index n_samples = result.samples.rows();
@@ -91,7 +92,7 @@ std::vector<cal::PredictiveRun> run_predictive(const cal::Study& study, const ca
     const auto row = static_cast<Eigen::Index>((static_cast<double>(j) + 0.5) * static_cast<double>(n_samples) / k);
     runs.push_back({"posterior_sample_" + std::to_string(j + 1), result.samples.row(row).transpose(), {}, {}, {}, {}});
   }
-  const fs::path predictive_folder = calibration_folder / "predictive";
+  const fs::path predictive_folder = calibration_folder.path() / "predictive";
   std::vector<fs::path> folders;
   for (auto& run : runs) {
     run.folder = predictive_folder / run.name;
@@ -116,17 +117,18 @@ std::vector<cal::PredictiveRun> run_predictive(const cal::Study& study, const ca
 
   // A predictive file of another posterior (a calibration continued with more runs) is
   // replaced; one of the same posterior is resumed.
-  const fs::path file = calibration_folder / "predictive.h5";
+  const fs::path file = calibration_folder.path() / "predictive.h5";
   bool resume = false;
   if (fs::exists(file)) {
     try {
       cal::check_same_design(cal::read_study_results(file), design, file);
       resume = true;
     } catch (const cal::FarmError&) {
-      fs::remove(file);
-      fs::remove_all(predictive_folder);
+      calibration_folder.clear({file.filename().string(), predictive_folder.filename().string()});
     }
   }
+  calibration_folder.record(file.filename().string());
+  calibration_folder.record(predictive_folder.filename().string());
   const PredictiveModel predictive(model, folders);
   cal::FarmOptions options = farm_options;
   options.resume = resume;
@@ -216,7 +218,8 @@ void run_calibrate(const CalibrateOptions& options, const ForwardModelFactory& f
   own_options.kind = "calibrate";
   own_options.overwrite = options.overwrite;
   own_options.evidence = {"evaluations", "predictive", "predictive.h5"};  // of a version before the marker
-  const fem::OutputFolder own_folder(calibration_folder, own_options);
+  fem::OutputFolder own_folder(calibration_folder, own_options);
+  own_folder.record("evaluations");
   output_folder.clear({own_names.begin() + 1, own_names.end()});
   for (auto name = own_names.begin() + 1; name != own_names.end(); ++name) output_folder.record(*name);
   if (!options.quiet) {
@@ -257,7 +260,7 @@ void run_calibrate(const CalibrateOptions& options, const ForwardModelFactory& f
               << settings.n_predictive_samples << " posterior samples)\n";
   }
   const std::vector<cal::PredictiveRun> predictive =
-      run_predictive(study, *model, result, settings, calibration_folder, calibration_options.farm);
+      run_predictive(study, *model, result, settings, own_folder, calibration_options.farm);
 
   const cal::CalibrationFiles files = cal::write_calibration_results(study, result, settings, likelihood, observations,
                                                                      predictive, initial, calibration_folder);

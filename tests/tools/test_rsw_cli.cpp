@@ -264,3 +264,33 @@ TEST(RswSimulateOutput, OverwriteNeverReplacesAResultFileRswDidNotWrite) {
   EXPECT_FALSE(fs::exists(dir / "results.h5"));
   fs::remove_all(dir);
 }
+
+// Two rsw processes into one folder: the second is refused at its start while the first
+// runs (the paper's case on the coarse mesh, a few seconds), and the first's result is
+// whole.
+TEST(RswSimulateOutput, SecondProcessIntoAFolderARunIsWritingIsRefusedAtItsStart) {
+  const fs::path dir = fresh_dir("two");
+  const fs::path log = fs::path(dir.string() + ".log"), rc = fs::path(dir.string() + ".rc");
+  fs::remove(rc);
+  const std::string paper = std::string(RSW_SOURCE_DIR) + "/validation/paper_case/weld.yaml";
+  const std::string first = std::string(RSW_BINARY) + " simulate " + paper + " -q -o " + dir.string() + coarse +
+                            " --set output.fields=false";
+  rsw::testing::run_command("(" + first + " > " + log.string() + " 2>&1; echo $? > " + rc.string() +
+                            ") < /dev/null > /dev/null 2>&1 &");  // popen returns at once
+  // The first run has claimed the folder once partial/ exists (it is made after the claim).
+  for (int i = 0; i < 600 && !fs::exists(dir / "partial") && !fs::exists(rc); ++i) ::usleep(50000);
+  ASSERT_TRUE(fs::exists(dir / "partial")) << rsw::testing::read_file(log);
+  const CommandResult second = simulate_into(dir);
+  const bool first_still_running = !fs::exists(rc);
+  EXPECT_EQ(second.status, 2) << second.output;
+  EXPECT_NE(second.output.find("is in use by another rsw run"), std::string::npos) << second.output;
+  for (int i = 0; i < 1200 && !fs::exists(rc); ++i) ::usleep(50000);
+  ASSERT_TRUE(fs::exists(rc));
+  EXPECT_TRUE(first_still_running);  // else the refusal above proves nothing
+  EXPECT_EQ(rsw::testing::read_file(rc), "0\n") << rsw::testing::read_file(log);
+  EXPECT_TRUE(fs::exists(dir / "summary.json"));
+  EXPECT_NE(rsw::testing::read_file(dir / "summary.json").find("\"case\": \"paper_case\""), std::string::npos);
+  fs::remove_all(dir);
+  fs::remove(log);
+  fs::remove(rc);
+}
