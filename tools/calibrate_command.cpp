@@ -196,7 +196,8 @@ void run_calibrate(const CalibrateOptions& options, const ForwardModelFactory& f
   calibration_options.initial_runs = cal::load_initial_runs(study, settings);
   // The output folder (shared with the study's runs), then this calibration's own folder
   // (exclusive: a second calibration into it is refused at once). The result files of
-  // an earlier session go first: a calibration that fails leaves none that look current.
+  // an earlier session go when the calibration starts (not when it is refused at its
+  // start): one that fails then leaves none that look current.
   fem::OutputFolder output_folder = claim_study_folder(study, "calibrate", options.overwrite);
   const cal::CalibrationFiles result_files = cal::calibration_files(study);
   std::vector<std::string> own_names = {calibration_folder.filename().string()};
@@ -220,8 +221,10 @@ void run_calibrate(const CalibrateOptions& options, const ForwardModelFactory& f
   own_options.evidence = {"evaluations", "predictive", "predictive.h5"};  // of a version before the marker
   fem::OutputFolder own_folder(calibration_folder, own_options);
   own_folder.record("evaluations");
-  output_folder.clear({own_names.begin() + 1, own_names.end()});
-  for (auto name = own_names.begin() + 1; name != own_names.end(); ++name) output_folder.record(*name);
+  calibration_options.on_start = [&] {
+    output_folder.clear({own_names.begin() + 1, own_names.end()});
+    for (auto name = own_names.begin() + 1; name != own_names.end(); ++name) output_folder.record(*name);
+  };
   if (!options.quiet) {
     std::cerr << "calibration " << study.name() << ": " << observations.values.rows() << " replicate"
               << (observations.values.rows() == 1 ? "" : "s") << " of " << observations.values.cols() << " feature"

@@ -563,7 +563,8 @@ TEST(CalibrateCli, WritesPlotsUnlessToldNotTo) {
 }
 
 // The output folder (fem/output_folder.hpp): a folder rsw did not make is refused
-// (here the study file's own), and so is a calibration whose folder another run holds.
+// (here the study file's own), and so is a calibration whose folder another run holds;
+// a resume refused at its start removes nothing.
 TEST(CalibrateCli, RefusesAFolderItDidNotMakeAndACalibrationFolderInUse) {
   const fs::path dir = fresh_dir("folders");
   const fs::path study = write_calibration_study(dir, "busy", "analytic: {function: smooth}\n", 3, 9);
@@ -586,6 +587,12 @@ TEST(CalibrateCli, RefusesAFolderItDidNotMakeAndACalibrationFolderInUse) {
   // Free again, and the marker alone is no earlier calibration.
   r = run_rsw("calibrate " + study.string() + " -q --no-plots -o " + out.string());
   EXPECT_EQ(r.status, 0) << r.output;
-  EXPECT_TRUE(fs::exists(out / "busy_calibration.json"));
+  const std::string summary = read_file(out / "busy_calibration.json");
+  // A resume refused at its start (the model changed) leaves the result as it was.
+  write_file(dir / "case.yaml", "analytic: {function: smooth, fail_above: 0.99}\n");
+  r = run_rsw("calibrate " + study.string() + " -q --no-plots --resume -o " + out.string());
+  EXPECT_NE(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("another forward model set-up"), std::string::npos) << r.output;
+  EXPECT_EQ(read_file(out / "busy_calibration.json"), summary);
   fs::remove_all(dir);
 }
