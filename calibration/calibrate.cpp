@@ -362,6 +362,8 @@ CalibrationResult Calibration::run() const {
     initial_design = initial;
   }
 
+  if (options_.on_start) options_.on_start();
+
   CalibrationResult result;
   result.method = options_.method;
   result.parameter_names = parameters.names();

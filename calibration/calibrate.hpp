@@ -122,6 +122,9 @@ struct CalibrationOptions {
   std::ostream* progress = nullptr;
   // Runs of an earlier study that make up the initial design (read_initial_runs).
   InitialRuns initial_runs;
+  // Called once the evaluation cache has been read and checked, before the first run:
+  // a calibration refused at its start (runs of another set-up) has not called it.
+  std::function<void()> on_start;
 };
 
 // One forward-model run asked for by the method, in the order asked.

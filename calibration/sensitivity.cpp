@@ -135,6 +135,10 @@ std::string sensitivity_json(const SensitivityReport& report) {
   return root.dump(2) + "\n";
 }
 
+std::vector<std::string> sensitivity_table_names(const std::string& stem) {
+  return {stem + "_sobol.csv", stem + "_sobol_second_order.csv", stem + "_sensitivity.json"};
+}
+
 std::vector<fs::path> write_sensitivity_tables(const SensitivityReport& report, const fs::path& folder,
                                                const std::string& stem) {
   fs::create_directories(folder);
@@ -161,8 +165,8 @@ std::vector<fs::path> write_sensitivity_tables(const SensitivityReport& report, 
       }
     }
   }
-  const std::vector<fs::path> paths = {folder / (stem + "_sobol.csv"), folder / (stem + "_sobol_second_order.csv"),
-                                       folder / (stem + "_sensitivity.json")};
+  const std::vector<std::string> names = sensitivity_table_names(stem);
+  const std::vector<fs::path> paths = {folder / names[0], folder / names[1], folder / names[2]};
   fem::write_text_file(paths[0], main.str());
   fem::write_text_file(paths[1], second.str());
   fem::write_text_file(paths[2], sensitivity_json(report));

@@ -62,6 +62,9 @@ SensitivityReport analyse_sensitivity(const StudyDesign& design, const StudyResu
 
 std::string sensitivity_json(const SensitivityReport& report);
 
+// The names of the three tables of `stem`, in the order write_sensitivity_tables writes them.
+std::vector<std::string> sensitivity_table_names(const std::string& stem);
+
 // Writes the three tables into `folder` (created if missing); returns their paths.
 std::vector<std::filesystem::path> write_sensitivity_tables(const SensitivityReport& report,
                                                             const std::filesystem::path& folder,

@@ -83,11 +83,11 @@ double nugget_enthalpy(const fem::Mesh& mesh, const std::vector<fem::Point>& pos
 
 }  // namespace
 
-WeldDriver::WeldDriver(const Problem& problem, fs::path output_dir, std::function<void(const Progress&)> progress,
-                       bool verbose)
+WeldDriver::WeldDriver(const Problem& problem, fem::OutputFolder& folder,
+                       std::function<void(const Progress&)> progress, bool verbose)
     : problem_(problem),
-      output_dir_(std::move(output_dir)),
-      partial_(output_dir_.string() + ".partial"),
+      folder_(folder),
+      partial_(folder.path() / "partial"),
       progress_(std::move(progress)),
       verbose_(verbose),
       clock_(result_.timing),
@@ -133,7 +133,8 @@ RunResult WeldDriver::fail(const std::string& message) {
   result_.message = message;
   if (!electrode_melting_note_.empty())
     result_.message += " (after an electrode had melted, " + electrode_melting_note_ + ")";
-  std::ofstream(partial_ / "failure.txt") << result_.message << "\n";
+  folder_.record("failure.txt");
+  std::ofstream(folder_.path() / "failure.txt") << result_.message << "\n";
   result_.wall_time = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start_).count();
   return result_;
 }
@@ -148,7 +149,7 @@ std::string WeldDriver::step_label(std::size_t k) const {
 
 void WeldDriver::setup() {
   clock_.start("setup");
-  result_.output_dir = output_dir_;
+  result_.output_dir = folder_.path();
   mesh_ = meshes::weld_mesh(problem_.geometry, problem_.mesh);
   materials::MaterialLibrary library;
   materials_.reserve(mesh_.n_bodies());
@@ -160,7 +161,7 @@ void WeldDriver::setup() {
     solidus_.push_back(body_materials_[b]->solidus());
   }
 
-  fs::remove_all(partial_);
+  folder_.record("partial");
   fs::create_directories(partial_);
 
   MechanicsSettings ms;
@@ -495,8 +496,7 @@ void WeldDriver::finish() {
   clock_.stop();
   result_.wall_time = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start_).count();
   write_summary_json(partial_ / "summary.json", problem_, result_);
-  fs::remove_all(output_dir_);
-  fs::rename(partial_, output_dir_);
+  folder_.install(partial_, "summary.json");  // last: a summary.json means a complete result
   result_.success = true;
 }
 

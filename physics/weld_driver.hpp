@@ -15,13 +15,15 @@
 //                   bookkeeping, the sheet/sheet bonding, the mechanics
 //                   (MechanicsStepper, which owns the sub-stepping), the recorded outputs
 //   finish()        the final nugget and energy balance, then the result files
-// A stage that fails returns its message; run() then writes failure.txt and returns the
-// failed RunResult.
+// The driver writes into `partial/` of its claimed output folder and moves the files
+// into the folder when the run has finished. A stage that fails returns its message;
+// run() then writes failure.txt into the folder and returns the failed RunResult.
 #pragma once
 
 #include "contact/interface_law.hpp"
 #include "contact/interface_laws.hpp"
 #include "fem/mesh.hpp"
+#include "fem/output_folder.hpp"
 #include "materials/material_library.hpp"
 #include "physics/electrical.hpp"
 #include "physics/electro_thermal_step.hpp"
@@ -66,7 +68,8 @@ struct RecordedState {
 class WeldDriver {
  public:
   // `verbose`: every coupling and Newton iteration to stderr.
-  WeldDriver(const Problem& problem, std::filesystem::path output_dir,
+  // `folder`: claimed and cleared of an earlier run's files (run_weld).
+  WeldDriver(const Problem& problem, fem::OutputFolder& folder,
              std::function<void(const Progress&)> progress = {}, bool verbose = false);
   ~WeldDriver();
   WeldDriver(const WeldDriver&) = delete;  // the solvers hold references to the mesh
@@ -100,7 +103,8 @@ class WeldDriver {
   std::vector<double> peak_temperature() const;
 
   const Problem& problem_;
-  std::filesystem::path output_dir_, partial_;
+  fem::OutputFolder& folder_;
+  std::filesystem::path partial_;
   std::function<void(const Progress&)> progress_;
   bool verbose_ = false;
   std::chrono::steady_clock::time_point t_start_;

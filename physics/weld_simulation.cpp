@@ -43,9 +43,20 @@ std::vector<double> weld_step_times(const Problem& problem) {
   return times;
 }
 
+const std::vector<std::string>& weld_output_names() {
+  static const std::vector<std::string> names = {"results.h5", "signals.csv", "summary.json", "fields.pvd",
+                                                 "fields_*",   "failure.txt", "partial"};
+  return names;
+}
+
 RunResult run_weld(const Problem& problem, const fs::path& output_dir,
-                   const std::function<void(const Progress&)>& progress, bool verbose) {
-  WeldDriver driver(problem, output_dir, progress, verbose);
+                   const std::function<void(const Progress&)>& progress, bool verbose, bool overwrite) {
+  fem::OutputFolderOptions options;
+  options.kind = "simulate";
+  options.overwrite = overwrite;
+  fem::OutputFolder folder(output_dir, options);
+  folder.clear(weld_output_names());
+  WeldDriver driver(problem, folder, progress, verbose);
   return driver.run();
 }
 

@@ -15,9 +15,13 @@
 //     (physics/electro_thermal_step), then solves the mechanics at the step's force
 //     and new temperature (physics/mechanics_stepper; staggered coupling).
 //
-// Outputs, written into `<dir>.partial/` and moved to `<dir>/` only when the run has
-// finished (a failed run leaves `<dir>.partial/` with `failure.txt` and never a
-// complete-looking `<dir>/`); physics/weld_output.hpp lists the fields:
+// Outputs, in the output folder (fem/output_folder.hpp: a new folder, an empty one or
+// one rsw made before, marked by `.rsw-output`; anything else is refused unless
+// `overwrite`, and nothing rsw did not write is removed or replaced). A run first
+// removes an earlier run's files there (listed in the marker), writes into
+// `partial/` and moves the files into the folder when it has finished: a failed run
+// leaves `failure.txt` (and `partial/`) and never a complete-looking result, old or
+// new. physics/weld_output.hpp lists the fields:
 //   results.h5    signals, squeeze history, contact pressure profiles at output times,
 //                 nugget, energy, the resolved config, version, timing (h5py / h5dump)
 //   signals.csv   the signals, one row per output time, units in the header
@@ -109,11 +113,18 @@ struct Progress {
   double resistance = 0;       // Ω, V/I (0 without current)
 };
 
+// The entries a weld run writes into its output folder ("fields_*": every entry that
+// begins so); an earlier run's are removed when a run starts.
+const std::vector<std::string>& weld_output_names();
+
 // Runs the case and writes its outputs (see above). Never throws for a failing
 // simulation: the failure is in RunResult::message and in failure.txt. Bad input
-// (unknown material, unwritable directory) throws.
-// `verbose` prints every coupling and Newton iteration to stderr (a diagnosis aid).
+// (unknown material, a folder it may not use, one in use by another run) throws;
+// a refused folder throws fem::OutputFolderError before anything is computed.
+// `verbose` prints every coupling and Newton iteration to stderr (a diagnosis aid);
+// `overwrite` accepts a non-empty output folder rsw did not make.
 RunResult run_weld(const Problem& problem, const std::filesystem::path& output_dir,
-                   const std::function<void(const Progress&)>& progress = {}, bool verbose = false);
+                   const std::function<void(const Progress&)>& progress = {}, bool verbose = false,
+                   bool overwrite = false);
 
 }  // namespace rsw::physics

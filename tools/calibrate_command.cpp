@@ -45,6 +45,7 @@ struct CalibrateOptions {
   double run_timeout = 0;
   bool quiet = false;
   bool plots = true;
+  bool overwrite = false;
 };
 
 // --- posterior-predictive runs -----------------------------------------------------
@@ -80,7 +81,8 @@ class PredictiveModel : public cal::ForwardModel {
 
 std::vector<cal::PredictiveRun> run_predictive(const cal::Study& study, const cal::ForwardModel& model,
                                           const cal::CalibrationResult& result, const cal::CalibrationSettings& settings,
-                                          const fs::path& calibration_folder, const cal::FarmOptions& farm_options) {
+                                          fem::OutputFolder& calibration_folder,
+                                          const cal::FarmOptions& farm_options) {
   std::vector<cal::PredictiveRun> runs;
   runs.push_back({"posterior_mean", result.mean, {}, {}, {}, {}});
   const Eigen::Index n_samples = result.samples.rows();
@@ -90,7 +92,7 @@ std::vector<cal::PredictiveRun> run_predictive(const cal::Study& study, const ca
     const auto row = static_cast<Eigen::Index>((static_cast<double>(j) + 0.5) * static_cast<double>(n_samples) / k);
     runs.push_back({"posterior_sample_" + std::to_string(j + 1), result.samples.row(row).transpose(), {}, {}, {}, {}});
   }
-  const fs::path predictive_folder = calibration_folder / "predictive";
+  const fs::path predictive_folder = calibration_folder.path() / "predictive";
   std::vector<fs::path> folders;
   for (auto& run : runs) {
     run.folder = predictive_folder / run.name;
@@ -115,17 +117,18 @@ std::vector<cal::PredictiveRun> run_predictive(const cal::Study& study, const ca
 
   // A predictive file of another posterior (a calibration continued with more runs) is
   // replaced; one of the same posterior is resumed.
-  const fs::path file = calibration_folder / "predictive.h5";
+  const fs::path file = calibration_folder.path() / "predictive.h5";
   bool resume = false;
   if (fs::exists(file)) {
     try {
       cal::check_same_design(cal::read_study_results(file), design, file);
       resume = true;
     } catch (const cal::FarmError&) {
-      fs::remove(file);
-      fs::remove_all(predictive_folder);
+      calibration_folder.clear({file.filename().string(), predictive_folder.filename().string()});
     }
   }
+  calibration_folder.record(file.filename().string());
+  calibration_folder.record(predictive_folder.filename().string());
   const PredictiveModel predictive(model, folders);
   cal::FarmOptions options = farm_options;
   options.resume = resume;
@@ -191,10 +194,37 @@ void run_calibrate(const CalibrateOptions& options, const ForwardModelFactory& f
   calibration_options.farm.run_timeout = options.run_timeout;
   calibration_options.progress = options.quiet ? nullptr : &std::cerr;
   calibration_options.initial_runs = cal::load_initial_runs(study, settings);
-  if (!options.resume && fs::exists(calibration_folder) && !fs::is_empty(calibration_folder)) {
+  // The output folder (shared with the study's runs), then this calibration's own folder
+  // (exclusive: a second calibration into it is refused at once). The result files of
+  // an earlier session go when the calibration starts (not when it is refused at its
+  // start): one that fails then leaves none that look current.
+  fem::OutputFolder output_folder = claim_study_folder(study, "calibrate", options.overwrite);
+  const cal::CalibrationFiles result_files = cal::calibration_files(study);
+  std::vector<std::string> own_names = {calibration_folder.filename().string()};
+  for (const auto& file : {result_files.h5, result_files.posterior_csv, result_files.diagnostics_csv, result_files.json})
+    own_names.push_back(file.filename().string());
+  output_folder.check(own_names);
+  const auto holds_runs = [&] {  // anything but the marker
+    if (!fs::is_directory(calibration_folder)) return false;
+    for (const auto& entry : fs::directory_iterator(calibration_folder))
+      if (entry.path().filename() != fem::OutputFolder::marker_name) return true;
+    return false;
+  };
+  if (!options.resume && holds_runs()) {
     throw std::runtime_error("calibration folder '" + calibration_folder.string() +
                              "' exists already; continue the calibration with --resume, or remove it to start again");
   }
+  output_folder.record(own_names.front());
+  fem::OutputFolderOptions own_options;
+  own_options.kind = "calibrate";
+  own_options.overwrite = options.overwrite;
+  own_options.evidence = {"evaluations", "predictive", "predictive.h5"};  // of a version before the marker
+  fem::OutputFolder own_folder(calibration_folder, own_options);
+  own_folder.record("evaluations");
+  calibration_options.on_start = [&] {
+    output_folder.clear({own_names.begin() + 1, own_names.end()});
+    for (auto name = own_names.begin() + 1; name != own_names.end(); ++name) output_folder.record(*name);
+  };
   if (!options.quiet) {
     std::cerr << "calibration " << study.name() << ": " << observations.values.rows() << " replicate"
               << (observations.values.rows() == 1 ? "" : "s") << " of " << observations.values.cols() << " feature"
@@ -233,7 +263,7 @@ void run_calibrate(const CalibrateOptions& options, const ForwardModelFactory& f
               << settings.n_predictive_samples << " posterior samples)\n";
   }
   const std::vector<cal::PredictiveRun> predictive =
-      run_predictive(study, *model, result, settings, calibration_folder, calibration_options.farm);
+      run_predictive(study, *model, result, settings, own_folder, calibration_options.farm);
 
   const cal::CalibrationFiles files = cal::write_calibration_results(study, result, settings, likelihood, observations,
                                                                      predictive, initial, calibration_folder);
@@ -299,7 +329,11 @@ void add_calibrate_command(CLI::App& app, ForwardModelFactory model_factory) {
   calibrate->add_option("--set", options->overrides, "Override a study key: --set key=value (repeatable)")
       ->take_all()
       ->allow_extra_args(false);
-  calibrate->add_option("-o,--output", options->output_dir, "Output folder (default: study.output of the study file)");
+  calibrate->add_option("-o,--output", options->output_dir,
+                        "Output folder (default: study.output of the study file): new, empty, or one rsw made before");
+  calibrate->add_flag("--overwrite", options->overwrite,
+                      "Write into a non-empty folder rsw did not make (rsw still removes and replaces only its own "
+                      "files)");
   calibrate->add_option("--workers", options->n_workers, "Worker processes per batch; 0: one per core")
       ->capture_default_str();
   calibrate->add_flag("--resume", options->resume,

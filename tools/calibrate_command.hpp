@@ -1,4 +1,4 @@
-// `rsw calibrate STUDY [--workers N] [--resume] [--timeout S] [-o DIR] [--set key=value] [-q]`:
+// `rsw calibrate STUDY [--workers N] [--resume] [--timeout S] [-o DIR] [--overwrite] [--set key=value] [-q]`:
 // Bayesian calibration of the study's parameters against the observations of its
 // `calibration:` section (calibration/calibration_study.hpp): Gaussian likelihood,
 // SBALC evidence with batches of runs on the evaluation farm, SIR posterior

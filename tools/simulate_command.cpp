@@ -2,7 +2,8 @@
 // stderr (one line rewritten in place on a terminal, a line per tenth of the steps
 // otherwise, e.g. in a log file), prints the key results (extremes of the signals on
 // the output grid, nugget geometry, energy balance) and says where the results are. A
-// failed simulation exits with code 1 and leaves only DIR.partial/ with failure.txt.
+// folder it may not use exits with code 2 before the run (physics/weld_simulation.hpp);
+// a failed simulation exits with code 1 and leaves DIR/failure.txt and DIR/partial/.
 #include "tools/simulate_command.hpp"
 
 #include "physics/weld_simulation.hpp"
@@ -13,6 +14,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -27,6 +29,7 @@ struct SimulateOptions {
   std::vector<std::string> overrides;
   bool quiet = false;
   bool verbose = false;
+  bool overwrite = false;
 };
 
 double value_of(const std::vector<std::pair<std::string, double>>& values, const std::string& name) {
@@ -101,10 +104,10 @@ void run_simulate(const SimulateOptions& options) {
     std::fprintf(stderr, "%sweld: step %d/%d, t = %.1f ms, T_max %.0f degC, %s%s%s", terminal ? "\r" : "", p.step,
                  p.n_steps, p.time * 1e3, p.max_temperature, resistance, left, terminal ? "   " : "\n");
   };
-  const auto result = physics::run_weld(problem, dir, progress, options.verbose);
+  const auto result = physics::run_weld(problem, dir, progress, options.verbose, options.overwrite);
   if (!options.quiet && terminal) std::fprintf(stderr, "\n");
   if (!result.success)
-    throw std::runtime_error("simulation failed: " + result.message + " (see " + dir + ".partial/failure.txt)");
+    throw std::runtime_error("simulation failed: " + result.message + " (see " + (std::filesystem::path(dir) / "failure.txt").string() + ")");
   std::printf("%s: done in %.1f s (%d weld steps, %d Newton iterations)\n", problem.name.c_str(), result.wall_time,
               result.n_steps, result.n_newton_iterations);
   std::printf("time:");
@@ -127,7 +130,10 @@ void add_simulate_command(CLI::App& app) {
   auto options = std::make_shared<SimulateOptions>();
   CLI::App* cmd = app.add_subcommand("simulate", "Run a weld case and write its results");
   cmd->add_option("case", options->case_file, "Weld-case YAML file")->required()->check(CLI::ExistingFile);
-  cmd->add_option("-o,--output", options->output_dir, "Output folder (default: the case's output.directory)");
+  cmd->add_option("-o,--output", options->output_dir,
+                  "Output folder (default: the case's output.directory): new, empty, or one rsw made before");
+  cmd->add_flag("--overwrite", options->overwrite,
+                "Write into a non-empty folder rsw did not make (rsw still removes and replaces only its own files)");
   cmd->add_option("--set", options->overrides, "Override a config key: --set key=value (repeatable)")
       ->take_all()
       ->allow_extra_args(false);

@@ -1,4 +1,4 @@
-// `rsw simulate CASE [-o DIR] [--set key=value ...]`: runs a weld case.
+// `rsw simulate CASE [-o DIR] [--overwrite] [--set key=value ...]`: runs a weld case.
 #pragma once
 
 #include <CLI/CLI.hpp>

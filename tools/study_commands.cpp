@@ -52,6 +52,7 @@ struct StudyOptions {
   std::vector<std::string> parts;
   std::string format = "markdown";
   bool plots = true;
+  bool overwrite = false;
 };
 
 cal::Study load_study(const StudyOptions& options) {
@@ -61,6 +62,9 @@ cal::Study load_study(const StudyOptions& options) {
 }
 
 
+
+const char* const overwrite_help =
+    "Write into a non-empty folder rsw did not make (rsw still removes and replaces only its own files)";
 
 const char* status_name(cal::StudyResults::Status status) {
   switch (status) {
@@ -90,7 +94,8 @@ std::string undefined_feature_reason(const std::string& name) {
 // signal's shape leaves features undefined has them as nan (CSV) / null (JSON), their
 // names in the CSV column undefined_features (space-separated) and names with reasons
 // in the JSON object "undefined_features".
-std::vector<fs::path> write_run_tables(const cal::Study& study, const cal::StudyResults& results) {
+std::vector<fs::path> write_run_tables(const cal::Study& study, const cal::StudyResults& results,
+                                       fem::OutputFolder& output) {
   const auto& names = results.parameter_names;
   const auto& features = results.feature_names;
   std::ostringstream csv;
@@ -137,10 +142,12 @@ std::vector<fs::path> write_run_tables(const cal::Study& study, const cal::Study
     runs.push_back(run);
   }
   Json root = {{"study", study.name()}, {"parameters", names}, {"features", features}, {"runs", runs}};
-  const fs::path folder = study.output_folder();
-  fs::create_directories(folder);
+  const fs::path folder = output.path();
   const fs::path csv_path = folder / (study.name() + "_runs.csv");
   const fs::path json_path = folder / (study.name() + "_runs.json");
+  output.check({csv_path.filename().string(), json_path.filename().string()});
+  output.record(csv_path.filename().string());
+  output.record(json_path.filename().string());
   write_text(csv_path, csv.str());
   write_text(json_path, root.dump(2) + "\n");
   return {csv_path, json_path};
@@ -184,6 +191,9 @@ void run_study(const StudyOptions& options, const ForwardModelFactory& factory) 
   farm_options.started_by_mpi_launcher = started_by_mpi_launcher();
   const std::unique_ptr<cal::ForwardModel> model = make_forward_model(study, factory);
   const fs::path file = cal::task_results_file(study.results_file(), farm_options.task);
+  fem::OutputFolder output = claim_study_folder(study, "study", options.overwrite, {file.filename().string()});
+  output.check({file.filename().string()});
+  output.record(file.filename().string());
   cal::EvaluationFarm farm(*model, study.design(), file, farm_options);
   const cal::FarmSummary summary = farm.run();
   if (!summary.writer) return;  // other MPI ranks: rank 0 reports
@@ -202,7 +212,8 @@ void run_study(const StudyOptions& options, const ForwardModelFactory& factory) 
   }
   if (!summary.complete) return;
   if (farm_options.task.is_whole()) {
-    for (const auto& table : write_run_tables(study, results)) std::cout << "  table: " << table.string() << "\n";
+    for (const auto& table : write_run_tables(study, results, output))
+      std::cout << "  table: " << table.string() << "\n";
   } else {
     std::cout << "  when every task is done: rsw study merge " << options.study_file << " "
               << cal::task_results_file(study.results_file(), cal::TaskPartition{0, farm_options.task.count}).string()
@@ -213,6 +224,9 @@ void run_study(const StudyOptions& options, const ForwardModelFactory& factory) 
 void merge_study(const StudyOptions& options) {
   const cal::Study study = load_study(options);
   std::vector<fs::path> parts(options.parts.begin(), options.parts.end());
+  fem::OutputFolder output = claim_study_folder(study, "study", options.overwrite);
+  output.check({study.results_file().filename().string()});
+  output.record(study.results_file().filename().string());
   const cal::MergeSummary summary = cal::merge_study_files(study.design(), study.results_file(), parts);
   std::cout << "study " << study.name() << ": merged " << parts.size() << " file" << (parts.size() == 1 ? "" : "s")
             << " into " << study.results_file().string() << ": " << summary.n_added << " runs added, "
@@ -221,17 +235,23 @@ void merge_study(const StudyOptions& options) {
   const cal::StudyResults results = cal::read_study_results(study.results_file());
   print_failures(results);
   if (summary.n_pending == 0) {
-    for (const auto& table : write_run_tables(study, results)) std::cout << "  table: " << table.string() << "\n";
+    for (const auto& table : write_run_tables(study, results, output))
+      std::cout << "  table: " << table.string() << "\n";
   }
 }
 
 void study_sensitivity(const StudyOptions& options) {
   const cal::Study study = load_study(options);
   const cal::StudyResults results = cal::read_study_results(study.results_file());
+  // Earlier tables go first: an analysis that fails leaves none that look current.
+  fem::OutputFolder output = claim_study_folder(study, "sensitivity", options.overwrite);
+  const std::vector<std::string> tables = cal::sensitivity_table_names(study.name());
+  output.clear(tables);
+  for (const auto& table : tables) output.record(table);
   const cal::SensitivityReport report = cal::analyse_sensitivity(study.design(), results, study.pce_options());
   std::cout << cal::format_sensitivity_summary(report);
   std::string json;
-  for (const auto& table : cal::write_sensitivity_tables(report, study.output_folder(), study.name())) {
+  for (const auto& table : cal::write_sensitivity_tables(report, output.path(), study.name())) {
     std::cout << "table: " << table.string() << "\n";
     if (table.extension() == ".json") json = table.string();
   }
@@ -361,6 +381,20 @@ std::unique_ptr<cal::ForwardModel> make_forward_model(const cal::Study& study, c
                                              study.feature_names(), temporary);
 }
 
+fem::OutputFolder claim_study_folder(const cal::Study& study, const std::string& kind, bool overwrite,
+                                     const std::vector<std::string>& evidence) {
+  const std::string name = study.name();
+  fem::OutputFolderOptions options;
+  options.kind = kind;
+  options.overwrite = overwrite;
+  options.shared = true;
+  options.evidence = {name + ".h5", name + "_runs.csv", name + "_runs.json", name + "_calibration",
+                      name + "_calibration.json"};
+  for (const auto& table : cal::sensitivity_table_names(name)) options.evidence.push_back(table);
+  options.evidence.insert(options.evidence.end(), evidence.begin(), evidence.end());
+  return fem::OutputFolder(study.output_folder(), options);
+}
+
 void add_study_commands(CLI::App& app, ForwardModelFactory model_factory) {
   auto options = std::make_shared<StudyOptions>();
   auto factory = std::make_shared<ForwardModelFactory>(std::move(model_factory));
@@ -372,7 +406,8 @@ void add_study_commands(CLI::App& app, ForwardModelFactory model_factory) {
     command->add_option("--set", options->overrides, "Override a study key: --set key=value (repeatable)")
         ->take_all()
         ->allow_extra_args(false);
-    command->add_option("-o,--output", options->output_dir, "Output folder (default: study.output of the study file)");
+    command->add_option("-o,--output", options->output_dir,
+                        "Output folder (default: study.output of the study file): new, empty, or one rsw made before");
   };
 
   CLI::App* run = study->add_subcommand("run", "Evaluate the study's design (parallel, resumable; MPI under mpirun)");
@@ -385,17 +420,20 @@ void add_study_commands(CLI::App& app, ForwardModelFactory model_factory) {
   run->add_option("--timeout", options->run_timeout, "Time limit per run in seconds (0: none); a run over it is recorded as failed")
       ->check(CLI::NonNegativeNumber);
   run->add_flag("-q,--quiet", options->quiet, "No progress lines");
+  run->add_flag("--overwrite", options->overwrite, overwrite_help);
   run->callback([options, factory]() { run_study(*options, *factory); });
 
   CLI::App* merge = study->add_subcommand("merge", "Merge the partial files of array-job tasks into the study file");
   add_study_file(merge);
   merge->add_option("parts", options->parts, "Partial results files (.task-i-of-n.h5)")->required();
+  merge->add_flag("--overwrite", options->overwrite, overwrite_help);
   merge->callback([options]() { merge_study(*options); });
 
   CLI::App* sensitivity =
       study->add_subcommand("sensitivity", "Sparse PCE and Sobol indices per feature of a finished study; CSV/JSON tables");
   add_study_file(sensitivity);
   sensitivity->add_flag("!--no-plots", options->plots, "Do not draw the Sobol heatmaps (tools/plot_study.py)");
+  sensitivity->add_flag("--overwrite", options->overwrite, overwrite_help);
   sensitivity->callback([options]() { study_sensitivity(*options); });
 
   CLI::App* show = study->add_subcommand("show", "Print the resolved study file and the size of its design");

@@ -32,7 +32,7 @@ class WeldForwardModel : public calibration::ForwardModel {
   std::vector<std::string> feature_names() const override;
   calibration::EvaluationResult evaluate(const Eigen::VectorXd& theta) const override;
   // Writes <folder>/signals.csv (and results.h5, summary.json); a failed run leaves
-  // <folder>.partial/failure.txt and is returned as a failure.
+  // <folder>/failure.txt and is returned as a failure.
   calibration::SignalOutput simulate_signals(const Eigen::VectorXd& theta,
                                              const std::filesystem::path& folder) const override;
 

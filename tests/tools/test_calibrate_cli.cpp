@@ -19,6 +19,7 @@
 //     predictive overlay.
 #include "calibration/farm.hpp"
 #include "fem/hdf5_file.hpp"
+#include "fem/output_folder.hpp"
 
 #include "tests/tools/cli_support.hpp"
 
@@ -558,5 +559,40 @@ TEST(CalibrateCli, WritesPlotsUnlessToldNotTo) {
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("note: plots not made (/nonexistent/python3 not found"), std::string::npos) << r.output;
   EXPECT_TRUE(fs::exists(dir / "nopython" / "auto_calibration.json"));
+  fs::remove_all(dir);
+}
+
+// The output folder (fem/output_folder.hpp): a folder rsw did not make is refused
+// (here the study file's own), and so is a calibration whose folder another run holds;
+// a resume refused at its start removes nothing.
+TEST(CalibrateCli, RefusesAFolderItDidNotMakeAndACalibrationFolderInUse) {
+  const fs::path dir = fresh_dir("folders");
+  const fs::path study = write_calibration_study(dir, "busy", "analytic: {function: smooth}\n", 3, 9);
+  CommandResult r = run_rsw("calibrate " + study.string() + " -q --no-plots -o " + dir.string());
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("output folder '" + dir.string() + "' holds entries rsw did not write"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("--overwrite"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "busy_calibration"));
+
+  const fs::path out = dir / "out";
+  {
+    rsw::fem::OutputFolderOptions other;
+    other.kind = "calibrate";
+    const rsw::fem::OutputFolder held(out / "busy_calibration", other);
+    r = run_rsw("calibrate " + study.string() + " -q --no-plots --resume -o " + out.string());
+    EXPECT_EQ(r.status, 2) << r.output;
+    EXPECT_NE(r.output.find("busy_calibration' is in use by another rsw run"), std::string::npos) << r.output;
+  }
+  // Free again, and the marker alone is no earlier calibration.
+  r = run_rsw("calibrate " + study.string() + " -q --no-plots -o " + out.string());
+  EXPECT_EQ(r.status, 0) << r.output;
+  const std::string summary = read_file(out / "busy_calibration.json");
+  // A resume refused at its start (the model changed) leaves the result as it was.
+  write_file(dir / "case.yaml", "analytic: {function: smooth, fail_above: 0.99}\n");
+  r = run_rsw("calibrate " + study.string() + " -q --no-plots --resume -o " + out.string());
+  EXPECT_NE(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("another forward model set-up"), std::string::npos) << r.output;
+  EXPECT_EQ(read_file(out / "busy_calibration.json"), summary);
   fs::remove_all(dir);
 }

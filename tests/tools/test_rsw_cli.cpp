@@ -2,7 +2,9 @@
 // reports the weld-zone element size; bad input exits non-zero with a message naming
 // the key and what is allowed, and writes nothing.
 #include "fem/hdf5_file.hpp"
+#include "fem/output_folder.hpp"
 #include "fem/vtk_output.hpp"
+#include "tests/tools/cli_support.hpp"
 
 #include <gtest/gtest.h>
 
@@ -112,7 +114,8 @@ TEST(RswSimulate, SqueezeRunWritesReadableResultsAndFields) {
   EXPECT_GT(last.block("sheet_1").cell_array("von_mises_stress").n_tuples(), 0);
   EXPECT_TRUE(fs::exists(dir / "summary.json"));
   EXPECT_TRUE(fs::exists(dir / "signals.csv"));
-  EXPECT_FALSE(fs::exists(dir.string() + ".partial"));
+  EXPECT_FALSE(fs::exists(dir / "partial"));
+  EXPECT_FALSE(fs::exists(dir / "failure.txt"));
   fs::remove_all(dir);
 }
 
@@ -134,14 +137,160 @@ TEST(RswSimulate, FieldsAreWrittenAtLeastTheFieldIntervalApartAndAtTheEnd) {
   fs::remove_all(dir);
 }
 
-TEST(RswSimulate, FailedRunLeavesOnlyPartialFolderWithReason) {
+TEST(RswSimulate, FailedRunLeavesItsReasonAndNoResult) {
   const fs::path dir = fresh_dir("fail");
   // Seating steps of 1 nm cannot reach 5 % of the force within the step cap.
   const CommandResult r = run_rsw("simulate " + squeeze_case + " -q -o " + dir.string() + coarse +
                                   " --set solver.seat_step=0.001um");
   EXPECT_EQ(r.status, 1) << r.output;
   EXPECT_NE(r.output.find("seating"), std::string::npos) << r.output;
-  EXPECT_FALSE(fs::exists(dir));
-  EXPECT_TRUE(fs::exists(dir.string() + ".partial/failure.txt"));
-  fs::remove_all(dir.string() + ".partial");
+  EXPECT_NE(rsw::testing::read_file(dir / "failure.txt").find("seating"), std::string::npos);
+  EXPECT_FALSE(fs::exists(dir / "summary.json"));
+  EXPECT_FALSE(fs::exists(dir / "results.h5"));
+  EXPECT_FALSE(fs::exists(dir.string() + ".partial"));
+  fs::remove_all(dir);
+}
+
+// Output folders (fem/output_folder.hpp) through rsw simulate: the squeeze-only case on
+// the coarse mesh, about a second per run.
+namespace {
+// A folder <tmp>/rsw_cli_<name>_<pid> that exists and is empty.
+fs::path empty_dir(const std::string& name) { return rsw::testing::fresh_dir("rsw_cli", name); }
+
+CommandResult simulate_into(const fs::path& out, const std::string& extra = "") {
+  return run_rsw("simulate " + squeeze_case + " -q -o " + out.string() + coarse + extra);
+}
+}  // namespace
+
+TEST(RswSimulateOutput, RefusesTheWorkingDirectoryHoldingTheCaseFileUnlessOverwriteAndThenKeepsIt) {
+  const fs::path dir = empty_dir("dot");
+  const std::string case_text = rsw::testing::read_file(squeeze_case);
+  rsw::testing::write_file(dir / "weld.yaml", case_text);
+  const std::string in_dir = "cd " + dir.string() + " && " + std::string(RSW_BINARY) + " simulate weld.yaml -q -o ." + coarse;
+  rsw::testing::CommandResult r = rsw::testing::run_command(in_dir);
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("output folder '.' (" + dir.string() + ")"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("'weld.yaml'"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("--overwrite"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "results.h5"));
+  EXPECT_FALSE(fs::exists(dir / ".rsw-output"));
+
+  r = rsw::testing::run_command(in_dir + " --overwrite");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_TRUE(fs::exists(dir / "summary.json"));
+  EXPECT_EQ(rsw::testing::read_file(dir / "weld.yaml"), case_text);
+  // The folder is now one rsw made its results in: a rerun needs no --overwrite, and
+  // replaces only its own files.
+  r = rsw::testing::run_command(in_dir);
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_EQ(rsw::testing::read_file(dir / "weld.yaml"), case_text);
+  fs::remove_all(dir);
+}
+
+TEST(RswSimulateOutput, RefusesAFileAsOutputFolderAndLeavesItAsItWas) {
+  const fs::path dir = empty_dir("file");
+  const fs::path file = rsw::testing::write_file(dir / "notes.txt", "mine\n");
+  for (const std::string extra : {"", " --overwrite"}) {
+    const CommandResult r = simulate_into(file, extra);
+    EXPECT_EQ(r.status, 2) << r.output;
+    EXPECT_NE(r.output.find("'" + file.string() + "' is a file, not a folder"), std::string::npos) << r.output;
+    EXPECT_TRUE(fs::is_regular_file(file));
+    EXPECT_EQ(rsw::testing::read_file(file), "mine\n");
+  }
+  fs::remove_all(dir);
+}
+
+TEST(RswSimulateOutput, SecondRunIntoTheSameFolderReplacesItsOwnResultAndKeepsOtherFiles) {
+  const fs::path dir = fresh_dir("again");
+  ASSERT_EQ(simulate_into(dir).status, 0);
+  ASSERT_EQ(rsw::fem::read_pvd(dir / "fields.pvd").size(), 3u);
+  rsw::testing::write_file(dir / "notes.txt", "mine\n");
+  // Fields every 5 ms from 2 ms signals: 0, 6 and 10 ms; signals 0, 2, ..., 10 ms.
+  const CommandResult r = simulate_into(dir, " --set output.interval=2ms");
+  ASSERT_EQ(r.status, 0) << r.output;
+  rsw::fem::Hdf5File h5(dir / "results.h5", rsw::fem::Hdf5Mode::read);
+  EXPECT_EQ(h5.read_doubles("/signals/time").size(), 6u);
+  const auto steps = rsw::fem::read_pvd(dir / "fields.pvd");
+  ASSERT_EQ(steps.size(), 3u);
+  EXPECT_NEAR(steps[1].time, 0.006, 1e-12);
+  EXPECT_EQ(rsw::testing::read_file(dir / "notes.txt"), "mine\n");
+  EXPECT_FALSE(fs::exists(dir / "partial"));
+  fs::remove_all(dir);
+}
+
+TEST(RswSimulateOutput, FailedRerunLeavesNoEarlierSuccessLookingCurrent) {
+  const fs::path dir = fresh_dir("rerun");
+  ASSERT_EQ(simulate_into(dir).status, 0);
+  ASSERT_TRUE(fs::exists(dir / "summary.json"));
+  // Seating steps of 1 nm cannot reach 5 % of the force within the step cap.
+  CommandResult r = simulate_into(dir, " --set solver.seat_step=0.001um");
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(rsw::testing::read_file(dir / "failure.txt").find("seating"), std::string::npos);
+  for (const char* name : {"summary.json", "results.h5", "signals.csv", "fields.pvd", "fields_0000.vtm"})
+    EXPECT_FALSE(fs::exists(dir / name)) << name;
+  r = simulate_into(dir);
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_TRUE(fs::exists(dir / "summary.json"));
+  EXPECT_FALSE(fs::exists(dir / "failure.txt"));
+  fs::remove_all(dir);
+}
+
+TEST(RswSimulateOutput, RunIntoAFolderInUseIsRefusedAtTheStartAndChangesNothing) {
+  const fs::path dir = fresh_dir("busy");
+  ASSERT_EQ(simulate_into(dir).status, 0);
+  const std::string summary = rsw::testing::read_file(dir / "summary.json");
+  {
+    // Another run holds the folder (the claim rsw simulate makes).
+    rsw::fem::OutputFolderOptions other;
+    other.kind = "simulate";
+    const rsw::fem::OutputFolder held(dir, other);
+    const CommandResult r = simulate_into(dir);
+    EXPECT_EQ(r.status, 2) << r.output;
+    EXPECT_NE(r.output.find("is in use by another rsw run"), std::string::npos) << r.output;
+    EXPECT_EQ(rsw::testing::read_file(dir / "summary.json"), summary);
+  }
+  EXPECT_EQ(simulate_into(dir).status, 0);  // free again
+  fs::remove_all(dir);
+}
+
+TEST(RswSimulateOutput, OverwriteNeverReplacesAResultFileRswDidNotWrite) {
+  const fs::path dir = empty_dir("foreign_summary");
+  rsw::testing::write_file(dir / "summary.json", "the user's\n");
+  const CommandResult r = simulate_into(dir, " --overwrite");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find((dir / "summary.json").string() + "' was not written by rsw"), std::string::npos)
+      << r.output;
+  EXPECT_EQ(rsw::testing::read_file(dir / "summary.json"), "the user's\n");
+  EXPECT_FALSE(fs::exists(dir / "results.h5"));
+  fs::remove_all(dir);
+}
+
+// Two rsw processes into one folder: the second is refused at its start while the first
+// runs (the paper's case on the coarse mesh, a few seconds), and the first's result is
+// whole.
+TEST(RswSimulateOutput, SecondProcessIntoAFolderARunIsWritingIsRefusedAtItsStart) {
+  const fs::path dir = fresh_dir("two");
+  const fs::path log = fs::path(dir.string() + ".log"), rc = fs::path(dir.string() + ".rc");
+  fs::remove(rc);
+  const std::string paper = std::string(RSW_SOURCE_DIR) + "/validation/paper_case/weld.yaml";
+  const std::string first = std::string(RSW_BINARY) + " simulate " + paper + " -q -o " + dir.string() + coarse +
+                            " --set output.fields=false";
+  rsw::testing::run_command("(" + first + " > " + log.string() + " 2>&1; echo $? > " + rc.string() +
+                            ") < /dev/null > /dev/null 2>&1 &");  // popen returns at once
+  // The first run has claimed the folder once partial/ exists (it is made after the claim).
+  for (int i = 0; i < 600 && !fs::exists(dir / "partial") && !fs::exists(rc); ++i) ::usleep(50000);
+  ASSERT_TRUE(fs::exists(dir / "partial")) << rsw::testing::read_file(log);
+  const CommandResult second = simulate_into(dir);
+  const bool first_still_running = !fs::exists(rc);
+  EXPECT_EQ(second.status, 2) << second.output;
+  EXPECT_NE(second.output.find("is in use by another rsw run"), std::string::npos) << second.output;
+  for (int i = 0; i < 1200 && !fs::exists(rc); ++i) ::usleep(50000);
+  ASSERT_TRUE(fs::exists(rc));
+  EXPECT_TRUE(first_still_running);  // else the refusal above proves nothing
+  EXPECT_EQ(rsw::testing::read_file(rc), "0\n") << rsw::testing::read_file(log);
+  EXPECT_TRUE(fs::exists(dir / "summary.json"));
+  EXPECT_NE(rsw::testing::read_file(dir / "summary.json").find("\"case\": \"paper_case\""), std::string::npos);
+  fs::remove_all(dir);
+  fs::remove(log);
+  fs::remove(rc);
 }

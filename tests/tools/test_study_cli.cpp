@@ -331,3 +331,46 @@ TEST(StudyCli, SensitivityDrawsHeatmapsUnlessToldNotTo) {
   EXPECT_TRUE(fs::exists(out / "maps_sobol_total_order.png")) << r.output;
   fs::remove_all(dir);
 }
+
+// The output folder (fem/output_folder.hpp): a non-empty folder rsw did not make is
+// refused unless --overwrite, which keeps what was there; the folder is then rsw's, so
+// --resume and sensitivity need no --overwrite.
+TEST(StudyCli, RunRefusesAFolderItDidNotMakeAndThenResumesInTheFolderItMade) {
+  const fs::path dir = fresh_dir("folder");
+  const fs::path study = write_lhs_study(dir, "small", 40);
+  const fs::path out = dir / "out";
+  fs::create_directories(out);
+  write_file(out / "notes.txt", "mine\n");
+  CommandResult r = run_rsw("study run " + study.string() + " -q -o " + out.string());
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("output folder '" + out.string() + "' holds entries rsw did not write (e.g. 'notes.txt')"),
+            std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(out / "small.h5"));
+  r = run_rsw("study run " + study.string() + " -q --overwrite -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  r = run_rsw("study run " + study.string() + " -q --resume -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("40/40 runs done (0 now, 40 before)"), std::string::npos) << r.output;
+  r = run_rsw("study sensitivity " + study.string() + " --no-plots -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_EQ(read_file(out / "notes.txt"), "mine\n");
+  fs::remove_all(dir);
+}
+
+// A folder a version before the marker wrote (the study's results file, no marker) is
+// the study's own: resumed and analysed without --overwrite.
+TEST(StudyCli, FolderOfAStudyFromBeforeTheMarkerIsAdopted) {
+  const fs::path dir = fresh_dir("adopt");
+  const fs::path study = write_lhs_study(dir, "small", 40);
+  const fs::path out = dir / "out";
+  ASSERT_EQ(run_rsw("study run " + study.string() + " -q -o " + out.string()).status, 0);
+  fs::remove(out / ".rsw-output");
+  write_file(out / "notes.txt", "mine\n");
+  CommandResult r = run_rsw("study run " + study.string() + " -q --resume -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  r = run_rsw("study sensitivity " + study.string() + " --no-plots -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_TRUE(fs::exists(out / "small_sobol.csv"));
+  EXPECT_EQ(read_file(out / "notes.txt"), "mine\n");
+  fs::remove_all(dir);
+}

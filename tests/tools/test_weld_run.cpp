@@ -54,9 +54,9 @@ std::string table_one_point(const std::string& tf_ss, const std::string& rho_ss,
          " W/(m*K)\"";
 }
 
-// The reason a failed run wrote into its partial folder (run folder + ".partial").
+// The reason a failed run wrote into its output folder.
 std::string failure_reason(const fs::path& dir) {
-  std::ifstream in(fs::path(dir.string() + ".partial") / "failure.txt");
+  std::ifstream in(dir / "failure.txt");
   return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
@@ -366,7 +366,6 @@ TEST(WeldRun, FailureAfterElectrodeMeltingSaysWhenTheElectrodeMelted) {
   EXPECT_NE(out.find("after an electrode had melted, at t = "), std::string::npos) << out;
   EXPECT_FALSE(fs::exists(dir / "summary.json"));
   fs::remove_all(dir);
-  fs::remove_all(dir.string() + ".partial");
 }
 
 // Design point 58 of the coarse Table I study (a resistive S/S film, t_f = 0.088 mm,
@@ -484,7 +483,6 @@ TEST(WeldRun, FoldedCellFailsTheRunSayingWhereAndWhen) {
   EXPECT_NE(out.find("the deformed mesh has folded"), std::string::npos) << out;
   EXPECT_FALSE(fs::exists(dir / "summary.json"));
   fs::remove_all(dir);
-  fs::remove_all(dir.string() + ".partial");
 }
 
 // Smoothness in the parameters (docs/MODEL.md, "Known limitations"; the paper's
