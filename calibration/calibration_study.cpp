@@ -14,7 +14,10 @@
 #include <fstream>
 #include <set>
 #include <sstream>
+#include <stdexcept>
+#include <string>
 #include <utility>
+#include <vector>
 
 namespace rsw::calibration {
 namespace {
@@ -28,6 +31,21 @@ using fem::Config;
 using fem::Range;
 
 const char* const observations_features_file = "calibration.observations.features_file";
+
+constexpr TrendType all_trends[] = {TrendType::Constant, TrendType::DiagonalQuadratic, TrendType::FullQuadratic};
+
+std::vector<std::string> trend_names() {
+  std::vector<std::string> names;
+  for (TrendType trend : all_trends) names.emplace_back(trend_name(trend));
+  return names;
+}
+
+// The trend a schema-checked choice names.
+TrendType trend_of(const std::string& name) {
+  for (TrendType trend : all_trends)
+    if (name == trend_name(trend)) return trend;
+  throw std::logic_error("unknown GP trend '" + name + "' passed the schema");
+}
 const char* const observations_signal_files = "calibration.observations.signal_files";
 const char* const noise_kind = "calibration.noise.kind";
 const char* const noise_standard_deviations = "calibration.noise.standard_deviations";
@@ -215,10 +233,8 @@ void declare_calibration_keys(fem::ConfigSchema& s) {
   s.choice("calibration.sbalc.kernel", {"matern52", "squared_exponential"})
       .default_value(defaults.gp.kernel == KernelType::SquaredExponential ? "squared_exponential" : "matern52")
       .doc("Anisotropic GP kernel.");
-  s.choice("calibration.sbalc.trend", {"constant", "diagonal_quadratic", "full_quadratic"})
-      .default_value(defaults.gp.trend == TrendType::Constant            ? "constant"
-                     : defaults.gp.trend == TrendType::DiagonalQuadratic ? "diagonal_quadratic"
-                                                                         : "full_quadratic")
+  s.choice("calibration.sbalc.trend", trend_names())
+      .default_value(trend_name(defaults.gp.trend))
       .doc("GP mean function; a quadratic suits a log-likelihood and is used once there are enough points.");
 
   s.string(initial_runs_key).default_value("")
@@ -251,8 +267,8 @@ void declare_calibration_keys(fem::ConfigSchema& s) {
       .doc("Particles of the tempered SMC sampler.");
   s.integer("calibration.emulator.seed").default_value(std::to_string(emulator.seed)).range(Range::closed(0, 1e9))
       .doc("Seed of the design, GP restarts and samplers.");
-  s.choice("calibration.emulator.trend", {"constant", "diagonal_quadratic", "full_quadratic"})
-      .default_value("diagonal_quadratic")
+  s.choice("calibration.emulator.trend", trend_names())
+      .default_value(trend_name(emulator.gp.trend))
       .doc("Mean function of each feature's GP.");
   s.number("calibration.emulator.warping_width", "1", "1").default_value(shortest(emulator.warping_width))
       .range(Range::closed(0, 1e6))
@@ -369,10 +385,7 @@ CalibrationSettings read_calibration_settings(const Study& study) {
   sbalc.log_likelihood_range = c.number("calibration.sbalc.log_likelihood_range");
   sbalc.gp.kernel =
       c.text("calibration.sbalc.kernel") == "squared_exponential" ? KernelType::SquaredExponential : KernelType::Matern52;
-  const std::string trend = c.text("calibration.sbalc.trend");
-  sbalc.gp.trend = trend == "constant"             ? TrendType::Constant
-                   : trend == "diagonal_quadratic" ? TrendType::DiagonalQuadratic
-                                                   : TrendType::FullQuadratic;
+  sbalc.gp.trend = trend_of(c.text("calibration.sbalc.trend"));
 
   // The emulator route.
   settings.method = c.text("calibration.method") == "emulator" ? CalibrationMethod::emulator : CalibrationMethod::sbalc;
@@ -388,10 +401,7 @@ CalibrationSettings read_calibration_settings(const Study& study) {
   emulator.warping_width = c.number("calibration.emulator.warping_width");
   emulator.noise_pairs = c.integer("calibration.emulator.noise_pairs");
   emulator.noise_pair_distance = c.number("calibration.emulator.noise_pair_distance");
-  const std::string emulator_trend = c.text("calibration.emulator.trend");
-  emulator.gp.trend = emulator_trend == "constant"             ? TrendType::Constant
-                      : emulator_trend == "diagonal_quadratic" ? TrendType::DiagonalQuadratic
-                                                               : TrendType::FullQuadratic;
+  emulator.gp.trend = trend_of(c.text("calibration.emulator.trend"));
   if (settings.method == CalibrationMethod::emulator) {
     const int n_initial = initial_points(settings, study.parameter_space().n_parameters());
     if (n_initial >= emulator.max_evaluations) {

@@ -224,19 +224,26 @@ TEST(Features, OfOneWeldDoNotDependOnHowFinelyItIsSampled) {
   EXPECT_GT(std::abs(fine_own - coarse_own), 0.005 * fine_own) << fine_own << " " << coarse_own;
 }
 
-TEST(SmoothCurve, ReproducesCubicBetweenSamplesWithExtremaOffTheGrid) {
-  // y = −(t − 0.37)² (t − 2) = −t³ + 2.74 t² − 1.6169 t + 0.2738: critical points where
-  // 3t² − 5.48 t + 1.6169 = 0, a minimum at 0.37 and a maximum at 4.37/3.
-  auto y = [](double t) { return -(t - 0.37) * (t - 0.37) * (t - 2); };
-  auto dy = [](double t) { return -(2 * (t - 0.37) * (t - 2) + (t - 0.37) * (t - 0.37)); };
+// y = −(t − 0.37)² (t − 2) = −t³ + 2.74 t² − 1.6169 t + 0.2738: critical points where
+// 3t² − 5.48 t + 1.6169 = 0, a minimum at 0.37 and a maximum at 4.37/3.
+double cubic_y(double t) { return -(t - 0.37) * (t - 0.37) * (t - 2); }
+double cubic_dy(double t) { return -(2 * (t - 0.37) * (t - 2) + (t - 0.37) * (t - 0.37)); }
+
+// The cubic's exact values and slopes at t = 0, 0.1, … (n samples).
+SmoothCurve cubic_curve(int n) {
   const double step = 0.1;
-  const int n = 18;
   Eigen::VectorXd values(n), slopes(n);
   for (int i = 0; i < n; ++i) {
-    values[i] = y(i * step);
-    slopes[i] = dy(i * step);
+    values[i] = cubic_y(i * step);
+    slopes[i] = cubic_dy(i * step);
   }
-  const SmoothCurve curve(0, step, values, slopes);
+  return SmoothCurve(0, step, values, slopes);
+}
+
+TEST(SmoothCurve, ReproducesCubicBetweenSamplesWithExtremaOffTheGrid) {
+  auto y = cubic_y;
+  auto dy = cubic_dy;
+  const SmoothCurve curve = cubic_curve(18);
   EXPECT_NEAR(curve.value(0.537), y(0.537), 1e-14);
   EXPECT_NEAR(curve.slope(1.234), dy(1.234), 1e-13);
   const double root = (5.48 + std::sqrt(5.48 * 5.48 - 12 * 1.6169)) / 6;  // the maximum
@@ -253,18 +260,9 @@ TEST(SmoothCurve, ReproducesCubicBetweenSamplesWithExtremaOffTheGrid) {
 }
 
 TEST(SmoothCurve, FirstMinimumEndsAFallingStartAndIsAbsentWhenTheCurveOnlyFalls) {
-  // y = −(t − 0.37)² (t − 2): falls on [0, 0.37), minimum at 0.37 (between samples
-  // 0.3 and 0.4), rises to 4.37/3, falls after it.
-  auto y = [](double t) { return -(t - 0.37) * (t - 0.37) * (t - 2); };
-  auto dy = [](double t) { return -(2 * (t - 0.37) * (t - 2) + (t - 0.37) * (t - 0.37)); };
-  const double step = 0.1;
-  const int n = 25;
-  Eigen::VectorXd values(n), slopes(n);
-  for (int i = 0; i < n; ++i) {
-    values[i] = y(i * step);
-    slopes[i] = dy(i * step);
-  }
-  const SmoothCurve curve(0, step, values, slopes);
+  // The cubic above falls on [0, 0.37), has its minimum at 0.37 (between samples 0.3
+  // and 0.4), rises to 4.37/3 and falls after it.
+  const SmoothCurve curve = cubic_curve(25);
   const std::optional<CurvePoint> valley = curve.first_minimum();
   ASSERT_TRUE(valley.has_value());
   EXPECT_NEAR(valley->time, 0.37, 1e-12);
