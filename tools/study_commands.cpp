@@ -293,7 +293,9 @@ struct FeaturesOptions {
 };
 
 void print_features(const FeaturesOptions& options) {
-  const cal::Signal signal = cal::read_signal_csv(options.signal_file);
+  std::vector<std::string> warnings;
+  const cal::Signal signal = cal::read_signal_csv(options.signal_file, warnings);
+  for (const auto& warning : warnings) std::fprintf(stderr, "rsw: warning: %s\n", warning.c_str());
   const cal::FeatureSettings settings;
   cal::FeatureValues values;
   cal::WeldStage stage;

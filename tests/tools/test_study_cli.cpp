@@ -117,6 +117,23 @@ TEST(Features, CliPrintsUndefinedFeaturesWithTheReasonAndExitsZero) {
   fs::remove_all(dir);
 }
 
+TEST(Features, CliWarnsOfAnImplausibleUnitAndStillPrintsTheFeatures) {
+  // The shipped signal with its current header rewritten to [A] over the kA numbers.
+  const fs::path dir = fresh_dir("ampere");
+  std::string text = read_file(shipped_signal);
+  const auto header = text.find("current [kA]");
+  ASSERT_NE(header, std::string::npos);
+  text.replace(header, 12, "current [A]");
+  const fs::path signal = write_file(dir / "ampere.csv", text);
+  const CommandResult r = run_rsw("features " + signal.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("rsw: warning: " + signal.string() + ": column 'current [A]' has a peak |I| of "),
+            std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(" A, outside 100 A .. 100 kA of a spot weld: kA?"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("  R_beta       resistance "), std::string::npos) << r.output;
+  fs::remove_all(dir);
+}
+
 TEST(Features, SignalWithoutCurrentPulseIsAClearError) {
   const fs::path dir = fresh_dir("no_pulse");
   std::string text = "time [ms], current [kA], voltage [V]\n";
