@@ -158,6 +158,27 @@ TEST(Features, SignalWithoutCurrentPulseIsAClearError) {
   fs::remove_all(dir);
 }
 
+TEST(StudyCli, UnknownStudyCommandNamesTheStudyCommandsAndExitsTwo) {
+  const CommandResult r = run_rsw("study rnu x.yaml");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("rsw: error: unknown command 'study rnu'; commands of 'study': run, "), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("(did you mean 'run'?)"), std::string::npos) << r.output;
+}
+
+TEST(Features, UnreadableOrWeldlessSignalFileIsBadInputExitTwo) {
+  const fs::path dir = fresh_dir("bad_input");
+  CommandResult r = run_rsw("features " + (dir / "missing.csv").string());
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("cannot open signal file"), std::string::npos) << r.output;
+  std::string text = "time [ms], current [kA], voltage [V]\n";
+  for (int k = 0; k < 50; ++k) text += std::to_string(k) + ", 0, 0\n";
+  r = run_rsw("features " + write_file(dir / "no_current.csv", text).string());
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("no current pulse"), std::string::npos) << r.output;
+  fs::remove_all(dir);
+}
+
 TEST(StudyCli, RunResumeAndSensitivityWriteTables) {
   const fs::path dir = fresh_dir("run");
   const fs::path study = write_lhs_study(dir, "small", 40);
