@@ -1,6 +1,7 @@
 // The calibration section of a study file, the observation files and the likelihood
 // built from them; see calibration_study.hpp.
 #include "calibration/calibration_study.hpp"
+#include "fem/csv.hpp"
 #include "fem/text.hpp"
 
 #include "calibration/signal.hpp"
@@ -23,7 +24,6 @@ namespace rsw::calibration {
 namespace {
 
 using fem::lower;
-using fem::parse_number;
 using fem::trim;
 
 namespace fs = std::filesystem;
@@ -488,13 +488,15 @@ Observations read_features_file(const fs::path& file, const std::vector<std::str
   observations.feature_names = feature_names;
   std::vector<std::vector<double>> rows;
 
-  std::string line;
-  std::size_t line_number = 0;
-  while (std::getline(in, line)) {
-    ++line_number;
-    const std::string text = trim(line);
-    if (text.empty() || text[0] == '#') continue;
-    const std::vector<std::string> fields = fem::split_fields(text);
+  fem::CsvReader reader(in);
+  std::vector<std::string> fields;
+  while (true) {
+    try {
+      if (!reader.next(fields)) break;
+    } catch (const fem::CsvError& error) {
+      throw ObservationError(name + ":" + std::to_string(reader.line_number()) + ": " + error.what());
+    }
+    const std::size_t line_number = reader.line_number();
     const std::string where = name + ":" + std::to_string(line_number) + ": ";
 
     if (columns.empty()) {
@@ -549,12 +551,13 @@ Observations read_features_file(const fs::path& file, const std::vector<std::str
 
     if (fields.size() != n_fields) {
       throw ObservationError(where + "expected " + std::to_string(n_fields) +
-                             " comma-separated values (one per header column), found " + std::to_string(fields.size()));
+                             " values separated by '" + std::string(1, reader.delimiter()) +
+                             "' (one per header column), found " + std::to_string(fields.size()));
     }
     std::vector<double> row;
     for (const Column& column : columns) {
       double value = 0;
-      if (!parse_number(fields[column.field], value)) {
+      if (!reader.parse_number(fields[column.field], value)) {
         throw ObservationError(where + "column " + std::to_string(column.field + 1) + " ('" + column.header + "'): '" +
                                fields[column.field] + "' is not a finite number");
       }
@@ -584,7 +587,7 @@ Observations features_of_signal_files(const std::vector<fs::path>& files, const 
     FeatureValues values;
     try {
       if (!fs::is_regular_file(files[r])) throw SignalError("no such file");
-      values = extract_features(read_signal_csv(name), settings);
+      values = extract_features(read_signal_csv(name, observations.warnings), settings);
     } catch (const FeatureError& e) {
       throw ObservationError(name + ": " + e.what());
     } catch (const SignalError& e) {
@@ -631,6 +634,7 @@ Observations load_observations(const Study& study, const CalibrationSettings& se
       const Observations one = features_of_signal_files({settings.signal_files[k]}, study.feature_names());
       observations.values.row(static_cast<Eigen::Index>(k)) = one.values.row(0);
       observations.replicate_sources.push_back(one.replicate_sources[0]);
+      observations.warnings.insert(observations.warnings.end(), one.warnings.begin(), one.warnings.end());
     } catch (const ObservationError& e) {
       fail(fem::item_path(observations_signal_files, static_cast<int>(k), "file"), e);
     }

@@ -100,6 +100,7 @@ struct Observations {
   std::vector<std::string> feature_names;
   Eigen::MatrixXd values;                  // N_obs × p, column j is feature_names[j]
   std::vector<std::string> replicate_sources;  // per row: "file:line" or the signal file
+  std::vector<std::string> warnings;  // implausible units in signal files (read_signal_csv), to print
 };
 
 // A CSV of feature vectors: '#' comment lines and blank lines skipped; a header of

@@ -1,6 +1,7 @@
 // Signals, uniform resampling, Savitzky–Golay smoothing, the Hermite curve through the
 // smoothed samples and the CSV reader; see signal.hpp for the definitions.
 #include "calibration/signal.hpp"
+#include "fem/csv.hpp"
 #include "fem/text.hpp"
 
 #include "fem/units.hpp"
@@ -12,6 +13,7 @@
 #include <charconv>
 #include <cmath>
 #include <fstream>
+#include <initializer_list>
 #include <limits>
 #include <sstream>
 #include <utility>
@@ -20,7 +22,6 @@ namespace rsw::calibration {
 namespace {
 
 using fem::lower;
-using fem::parse_number;
 using fem::trim;
 
 std::string format_number(double value) {
@@ -416,6 +417,11 @@ double SmoothCurve::fit_slope() const {
 // CSV reader
 
 Signal read_signal_csv(const std::string& path) {
+  std::vector<std::string> warnings;
+  return read_signal_csv(path, warnings);
+}
+
+Signal read_signal_csv(const std::string& path, std::vector<std::string>& warnings) {
   std::ifstream in(path);
   if (!in) throw SignalError("cannot open signal file '" + path + "'");
 
@@ -438,13 +444,15 @@ Signal read_signal_csv(const std::string& path) {
     return "column " + std::to_string(index + 1) + " ('" + columns[index].header + "')";
   };
 
-  std::string line;
-  std::size_t line_number = 0;
-  while (std::getline(in, line)) {
-    ++line_number;
-    const std::string text = trim(line);
-    if (text.empty() || text[0] == '#') continue;
-    const std::vector<std::string> fields = fem::split_fields(text);
+  fem::CsvReader reader(in);
+  std::vector<std::string> fields;
+  while (true) {
+    try {
+      if (!reader.next(fields)) break;
+    } catch (const fem::CsvError& error) {
+      throw SignalError(where(reader.line_number()) + error.what());
+    }
+    const std::size_t line_number = reader.line_number();
 
     if (columns.empty()) {
       for (std::size_t i = 0; i < fields.size(); ++i) {
@@ -514,7 +522,8 @@ Signal read_signal_csv(const std::string& path) {
 
     if (fields.size() != columns.size()) {
       throw SignalError(where(line_number) + "expected " + std::to_string(columns.size()) +
-                        " comma-separated values (one per header column), found " +
+                        " values separated by '" + std::string(1, reader.delimiter()) +
+                        "' (one per header column), found " +
                         std::to_string(fields.size()));
     }
     std::vector<double> row(fields.size());
@@ -525,7 +534,7 @@ Signal read_signal_csv(const std::string& path) {
         row[i] = std::nan("");
         continue;
       }
-      if (!parse_number(fields[i], value)) {
+      if (!reader.parse_number(fields[i], value)) {
         throw SignalError(where(line_number) + column_label(i) + ": '" + fields[i] +
                           "' is not a finite number" +
                           (columns[i].name == signal_column::resistance ? "" : " ('nan' is read only in a resistance column)"));
@@ -573,6 +582,71 @@ Signal read_signal_csv(const std::string& path) {
     Eigen::VectorXd values(n);
     for (Eigen::Index k = 0; k < n; ++k) values[k] = columns[i].scale * data[k][i] + columns[i].offset;
     signal.add_column(columns[i].name, columns[i].si_unit, std::move(values));
+  }
+
+  // Plausibility of the units (see signal.hpp).
+  const auto header_of = [&](const char* name) {
+    for (const auto& column : columns)
+      if (column.name == name) return column;
+    return ColumnSpec{};
+  };
+  // The first of `candidates` in which the column's raw numbers would land in
+  // [lower, upper] (SI), as " <unit>?", or "" if none does.
+  const auto likely_unit = [](const ColumnSpec& column, double raw, double lower, double upper,
+                              std::initializer_list<const char*> candidates) {
+    for (const char* candidate : candidates) {
+      if (candidate == column.unit) continue;
+      const double si = fem::convert_units(raw, candidate, column.si_unit);
+      if (si >= lower && si <= upper) return std::string(": ") + candidate + "?";
+    }
+    return std::string();
+  };
+  std::vector<bool> in_stage(static_cast<std::size_t>(n), true);
+  if (signal.has_column(signal_column::current)) {
+    const ColumnSpec column = header_of(signal_column::current);
+    const Eigen::VectorXd& current = signal.column(signal_column::current);
+    const double peak = current.cwiseAbs().maxCoeff();
+    if ((peak > 0 && peak < 100) || peak > 100e3) {  // no current at all is the extractor's error
+      const double raw = (peak - column.offset) / column.scale;
+      warnings.push_back(path + ": column '" + column.header + "' has a peak |I| of " + format_number(raw) + " " +
+                         column.unit + ", outside 100 A .. 100 kA of a spot weld" +
+                         likely_unit(column, raw, 100, 100e3, {"kA", "A", "mA", "MA"}));
+    }
+    for (Eigen::Index k = 0; k < n; ++k) in_stage[static_cast<std::size_t>(k)] = std::abs(current[k]) >= 0.1 * peak;
+  }
+  std::vector<double> resistance;
+  std::string source;
+  ColumnSpec resistance_column;
+  if (signal.has_column(signal_column::resistance)) {
+    resistance_column = header_of(signal_column::resistance);
+    source = "column '" + resistance_column.header + "'";
+    for (Eigen::Index k = 0; k < n; ++k)
+      if (in_stage[static_cast<std::size_t>(k)]) resistance.push_back(signal.column(signal_column::resistance)[k]);
+  } else if (signal.has_column(signal_column::voltage) && signal.has_column(signal_column::current)) {
+    source = "voltage/current ('" + header_of(signal_column::voltage).header + "' / '" +
+             header_of(signal_column::current).header + "')";
+    for (Eigen::Index k = 0; k < n; ++k) {
+      const double current = signal.column(signal_column::current)[k];
+      if (in_stage[static_cast<std::size_t>(k)] && current != 0)
+        resistance.push_back(signal.column(signal_column::voltage)[k] / current);
+    }
+  }
+  if (!resistance.empty()) {
+    const auto middle = resistance.begin() + static_cast<std::ptrdiff_t>(resistance.size() / 2);
+    std::nth_element(resistance.begin(), middle, resistance.end());
+    const double median = std::abs(*middle);
+    if (median > 10e-3 || median < 1e-6) {
+      std::string hint;
+      if (!resistance_column.header.empty()) {
+        hint = likely_unit(resistance_column, (median - resistance_column.offset) / resistance_column.scale, 1e-6,
+                           10e-3, {"uohm", "mohm", "ohm"});
+      } else {
+        hint = median > 10e-3 ? ": current in kA written as A, or voltage in mV written as V?"
+                              : ": current in A written as kA, or voltage in V written as mV?";
+      }
+      warnings.push_back(path + ": the dynamic resistance from " + source + " has a weld-stage median of " +
+                         format_number(median * 1e6) + " uohm, outside 1 uohm .. 10 mohm of a spot weld" + hint);
+    }
   }
   return signal;
 }

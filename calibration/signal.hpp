@@ -172,13 +172,25 @@ class SmoothCurve {
   double end_;
 };
 
-// Reads a measured signal file: comma-separated, '#' starts a comment line, blank lines
-// are skipped; the first other line is the header, one "name [unit]" per column, e.g.
+// Reads a measured signal file, records as fem/csv.hpp reads them (RFC 4180 quotes, a
+// UTF-8 BOM, '#' comment lines, ',' or ';' delimiters, decimal commas with ';'); the
+// first record is the header, one "name [unit]" per column, e.g.
 //     time [ms], current [kA], voltage [V], force [kN], displacement [mm]
 // Names are matched case-insensitively against the canonical column names
 // ("resistance [uOhm]" may stand in for voltage); other names are kept as written.
 // Values are converted to SI (temperatures to °C) with fem/units.hpp. A time column is
 // required. Every error is a SignalError naming the file, the line and the column.
 Signal read_signal_csv(const std::string& path);
+
+// The same, appending to `warnings` one line per implausible value that suggests a unit
+// mix-up in the header (not an error: the file reads), each naming the file and the
+// column as written, e.g. "column 'current [A]' has a peak |I| of 8 A, outside
+// 100 A .. 100 kA of a spot weld: kA?":
+// - the current's peak |I| below 100 A or above 100 kA;
+// - the dynamic resistance (the resistance column, else voltage/current) with a median
+//   above 10 mΩ or below 1 µΩ over the weld stage, taken here as the samples with
+//   |I| ≥ 0.1 I_peak (the extractor's default threshold; all samples without current).
+// Spot welds carry 1–50 kA and 20–1000 µΩ, so these bounds leave room on both sides.
+Signal read_signal_csv(const std::string& path, std::vector<std::string>& warnings);
 
 }  // namespace rsw::calibration

@@ -24,18 +24,6 @@ std::string lower(std::string text) {
   return text;
 }
 
-std::vector<std::string> split_fields(const std::string& line, char delimiter) {
-  std::vector<std::string> fields;
-  std::size_t start = 0;
-  while (true) {
-    const auto end = line.find(delimiter, start);
-    fields.push_back(trim(line.substr(start, end == std::string::npos ? std::string::npos : end - start)));
-    if (end == std::string::npos) break;
-    start = end + 1;
-  }
-  return fields;
-}
-
 bool parse_number(const std::string& field, double& value) {
   const char* first = field.data();
   const char* last = field.data() + field.size();

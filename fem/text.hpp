@@ -1,6 +1,6 @@
 // Small text helpers shared by the file readers and writers (config, units, signal
-// files, study and calibration results): trimming, lower case, splitting a delimited
-// line, a locale-independent number parse; CSV cells, numbers as text, a text file.
+// files, study and calibration results): trimming, lower case, a locale-independent
+// number parse (reading CSV records: fem/csv.hpp); CSV cells, numbers as text, a text file.
 #pragma once
 
 #include <filesystem>
@@ -14,9 +14,6 @@ std::string trim(const std::string& text);
 
 // ASCII lower case.
 std::string lower(std::string text);
-
-// The fields of one line split at `delimiter`, each trimmed; "a, b,," → {"a", "b", "", ""}.
-std::vector<std::string> split_fields(const std::string& line, char delimiter = ',');
 
 // Locale-independent parse of a whole field (std::from_chars, an optional leading '+');
 // false unless the field is exactly one finite number.

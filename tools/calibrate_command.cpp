@@ -178,6 +178,8 @@ void run_calibrate(const CalibrateOptions& options, const ForwardModelFactory& f
   }
   const cal::CalibrationSettings settings = cal::read_calibration_settings(study);
   const cal::Observations observations = cal::load_observations(study, settings);
+  for (const auto& warning : observations.warnings)
+    std::printf("calibration %s: warning: %s\n", study.name().c_str(), warning.c_str());
   const cal::GaussianLikelihood likelihood = cal::make_likelihood(study, settings, observations);
   const std::unique_ptr<cal::ForwardModel> model = make_forward_model(study, factory);
 

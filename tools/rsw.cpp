@@ -6,8 +6,9 @@
 //   rsw features FILE [-o JSON]                    features of a signal file
 //   rsw config schema [--format markdown|json]     every config key, documented
 //   rsw config show CASE [--set key=value ...]     the resolved case
-// Errors in the input end the program with exit code 2 and a message naming the
-// file, line, key, value and what is allowed; other failures exit with code 1.
+// Exit codes (tools/run_cli.hpp, README.md): 0 done; 2 bad input (a usage error, or an
+// input file's error naming the file, line, key, value and what is allowed); 1 a run
+// that failed.
 #include "fem/config.hpp"
 #include "fem/threads.hpp"
 #include "materials/material_library.hpp"

@@ -13,6 +13,7 @@
 #include "calibration/signal.hpp"
 #include "calibration/study.hpp"
 
+#include "fem/config.hpp"
 #include "fem/text.hpp"
 
 #include "fem/units.hpp"
@@ -292,8 +293,16 @@ struct FeaturesOptions {
   std::string json_file;
 };
 
+// A signal file that cannot be read or has no weld in it is bad input (exit code 2).
 void print_features(const FeaturesOptions& options) {
-  const cal::Signal signal = cal::read_signal_csv(options.signal_file);
+  std::vector<std::string> warnings;
+  cal::Signal signal(Eigen::VectorXd{});
+  try {
+    signal = cal::read_signal_csv(options.signal_file, warnings);
+  } catch (const cal::SignalError& e) {
+    throw fem::ConfigError(e.what());
+  }
+  for (const auto& warning : warnings) std::fprintf(stderr, "rsw: warning: %s\n", warning.c_str());
   const cal::FeatureSettings settings;
   cal::FeatureValues values;
   cal::WeldStage stage;
@@ -301,9 +310,9 @@ void print_features(const FeaturesOptions& options) {
     stage = cal::find_weld_stage(signal, settings.weld_current_fraction);
     values = cal::extract_features(signal, settings);
   } catch (const cal::FeatureError& e) {
-    throw cal::FeatureError(options.signal_file + ": " + e.what());
+    throw fem::ConfigError(options.signal_file + ": " + e.what());
   } catch (const cal::SignalError& e) {
-    throw cal::SignalError(options.signal_file + ": " + e.what());
+    throw fem::ConfigError(options.signal_file + ": " + e.what());
   }
   std::printf("features of %s\n", options.signal_file.c_str());
   std::printf("  weld stage %.2f .. %.2f ms, peak current %.3f kA\n", stage.start * 1e3, stage.end * 1e3,

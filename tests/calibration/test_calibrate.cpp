@@ -595,6 +595,39 @@ TEST(CalibrationStudy, SignalFilesAndFeaturesFileGiveTheSameLikelihood) {
   fs::remove_all(dir);
 }
 
+// The features file goes through the same CSV reader as the signal files.
+TEST(CalibrationStudy, FeaturesFileMayBeALoggerExportWithSemicolonsAndDecimalCommas) {
+  const fs::path dir = fresh_dir("semicolon");
+  write_file(dir / "obs.csv", "\xEF\xBB\xBF\"R_beta [uohm]\";\"dS_P [um]\"\n180,5;30\n184;33,25\n");
+  const Study study = Study::load(write_study(dir, "calibration:\n  observations: {features_file: obs.csv}\n"));
+  const Observations observations = load_observations(study, read_calibration_settings(study));
+  ASSERT_EQ(observations.values.rows(), 2);
+  EXPECT_NEAR(observations.values(0, 0), 180.5e-6, 1e-15);
+  EXPECT_NEAR(observations.values(1, 1), 33.25e-6, 1e-15);
+  fs::remove_all(dir);
+}
+
+TEST(CalibrationStudy, ObservedSignalWithAnImplausibleUnitWarnsAndStillGivesFeatures) {
+  const fs::path dir = fresh_dir("ampere_observation");
+  // 8 kA written as "8" under "current [A]": a peak of 8 A.
+  std::ostringstream text;
+  text << "time [ms], current [A], voltage [V]\n";
+  for (int k = 0; k <= 800; ++k) {
+    const double t = -20.0 + 0.2 * k;
+    const double current = t < 0 || t > 120 ? 0.0 : 8.0;
+    char row[96];
+    std::snprintf(row, sizeof row, "%.1f, %.3f, %.8f\n", t, current, current * (200.0 - 0.5 * std::max(t, 0.0)) * 1e-3);
+    text << row;
+  }
+  const fs::path file = write_file(dir / "ampere.csv", text.str());
+  const Observations observations = features_of_signal_files({file}, {"R_gamma"});
+  EXPECT_TRUE(observations.values.allFinite());
+  ASSERT_EQ(observations.warnings.size(), 2u);
+  EXPECT_EQ(observations.warnings[0].find(file.string() + ": column 'current [A]' has a peak |I| of 8 A"), 0u)
+      << observations.warnings[0];
+  fs::remove_all(dir);
+}
+
 TEST(CalibrationStudy, NoiseModelsGiveTheirVariances) {
   const fs::path dir = fresh_dir("noise");
   write_file(dir / "obs.csv", "R_beta [uohm], dS_P [um]\n180, 30\n184, 33\n179, 31\n181, 34\n");
@@ -654,7 +687,7 @@ TEST(CalibrationStudy, BadObservationFilesNameFileLineAndWhatIsAllowed) {
   message = error_for("R_beta [uohm], dS_P [um]\n180, 30\n181, abc\n");
   EXPECT_NE(message.find(file + ":3: column 2 ('dS_P [um]'): 'abc' is not a finite number"), std::string::npos) << message;
   message = error_for("R_beta [uohm], dS_P [um]\n180, 30, 4\n");
-  EXPECT_NE(message.find(file + ":2: expected 2 comma-separated values (one per header column), found 3"),
+  EXPECT_NE(message.find(file + ":2: expected 2 values separated by ',' (one per header column), found 3"),
             std::string::npos)
       << message;
   message = error_for("R_beta [uohm], dS_P [um]\n");

@@ -741,6 +741,67 @@ TEST_F(SignalCsv, ResistanceMayReplaceVoltage) {
   EXPECT_NEAR(signal.column(signal_column::resistance)[1], 160.5e-6, 1e-18);
 }
 
+// Data-logger exports: a UTF-8 BOM, quoted headers, ';' between fields and decimal commas.
+TEST_F(SignalCsv, ReadsSemicolonSeparatedFilesWithDecimalCommas) {
+  const Signal signal = read_signal_csv(write("logger.csv",
+                                              "\xEF\xBB\xBF\"time [ms]\";\"current [kA]\";\"voltage [V]\"\n"
+                                              "0;0;0\n"
+                                              "0,5;8,25;1,2\n"));
+  ASSERT_EQ(signal.n_samples(), 2u);
+  EXPECT_DOUBLE_EQ(signal.time()[1], 0.5e-3);
+  EXPECT_DOUBLE_EQ(signal.column(signal_column::current)[1], 8250);
+  EXPECT_DOUBLE_EQ(signal.column(signal_column::voltage)[1], 1.2);
+}
+
+TEST_F(SignalCsv, ReadsQuotedHeadersWithCommasAndDoubledQuotes) {
+  const Signal signal = read_signal_csv(write(
+      "quoted.csv", "\"time [ms]\",\"current [kA]\",\"gun \"\"B\"\", left [N]\"\n0,1,2\n1,3,4\n"));
+  EXPECT_DOUBLE_EQ(signal.column(signal_column::current)[1], 3000);
+  ASSERT_TRUE(signal.has_column("gun \"B\", left"));
+  EXPECT_DOUBLE_EQ(signal.column("gun \"B\", left")[1], 4);
+}
+
+TEST_F(SignalCsv, DecimalCommasNeedTheSemicolonDelimiter) {
+  // With ',' between fields "0,5" is two fields: the row has one value too many.
+  std::string message = read_error(write("comma.csv", "time [ms], current [kA]\n0, 0\n0,5, 8\n"));
+  EXPECT_NE(message.find(":3: expected 2 values separated by ','"), std::string::npos) << message;
+  message = read_error(write("quote.csv", "time [ms];current [kA]\n0;0\n1;\"8\n"));
+  EXPECT_NE(message.find("quote.csv:3: column 2: a quoted field has no closing quote"), std::string::npos)
+      << message;
+}
+
+// A unit mix-up in the header reads, with a warning naming the column and the likely unit.
+std::vector<std::string> warnings_of(const std::string& path) {
+  std::vector<std::string> warnings;
+  read_signal_csv(path, warnings);
+  return warnings;
+}
+
+TEST_F(SignalCsv, CurrentInKiloampereWrittenAsAmpereIsAWarningNotAnError) {
+  // 8 "A" peak; R = V/I = 1.6 V / 8 A = 0.2 Ω = 200000 µΩ on the weld stage.
+  const std::string path = write("ampere.csv", "time [ms], current [A], voltage [V]\n0, 0, 0\n1, 8, 1.6\n2, 8, 1.6\n");
+  const std::vector<std::string> warnings = warnings_of(path);
+  ASSERT_EQ(warnings.size(), 2u);
+  EXPECT_EQ(warnings[0], path + ": column 'current [A]' has a peak |I| of 8 A, outside 100 A .. 100 kA of a spot "
+                                "weld: kA?");
+  EXPECT_EQ(warnings[1], path + ": the dynamic resistance from voltage/current ('voltage [V]' / 'current [A]') has a "
+                                "weld-stage median of 200000 uohm, outside 1 uohm .. 10 mohm of a spot weld: current "
+                                "in kA written as A, or voltage in mV written as V?");
+  // The same numbers with the right unit: 8 kA, 1.6 V / 8000 A = 200 µΩ, no warning.
+  EXPECT_TRUE(warnings_of(write("kiloampere.csv", "time [ms], current [kA], voltage [V]\n0, 0, 0\n1, 8, 1.6\n"
+                                                  "2, 8, 1.6\n")).empty());
+}
+
+TEST_F(SignalCsv, ResistanceInTheWrongUnitIsAWarningWithTheLikelyUnit) {
+  // 180 read as mΩ is 0.18 Ω, above 10 mΩ; as µΩ (180e-6 Ω) it would be plausible.
+  const std::string path =
+      write("milliohm.csv", "time [ms]; current [kA]; resistance [mohm]\n0;8;180\n1;8;182\n2;8;184\n");
+  const std::vector<std::string> warnings = warnings_of(path);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_EQ(warnings[0], path + ": the dynamic resistance from column 'resistance [mohm]' has a weld-stage median "
+                                "of 182000 uohm, outside 1 uohm .. 10 mohm of a spot weld: uohm?");
+}
+
 TEST_F(SignalCsv, ErrorsNameFileLineAndColumn) {
   const std::string bad_number = write("bad_number.csv",
                                        "time [ms], current [kA]\n0, 0\n0.5, 8..0\n");

@@ -41,6 +41,27 @@ fs::path fresh_dir(const std::string& name) {
 const std::string paper_case = std::string(RSW_SOURCE_DIR) + "/validation/paper_case/weld.yaml";
 }  // namespace
 
+// Exit codes (README.md): 0 done, 1 the run failed, 2 bad input, usage errors included.
+TEST(RswCli, UnknownCommandIsNamedWithTheCommandsAndTheClosestAndExitsTwo) {
+  const CommandResult r = run_rsw("simulat " + paper_case);
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("rsw: error: unknown command 'simulat'; commands: mesh, simulate, study, calibrate, "
+                          "features, config (did you mean 'simulate'?)"),
+            std::string::npos)
+      << r.output;
+  EXPECT_EQ(r.output.find("A subcommand is required"), std::string::npos) << r.output;
+}
+
+TEST(RswCli, UsageErrorsExitTwoAndHelpAndVersionExitZero) {
+  for (const char* args : {"simulate", "simulate --no-such-option x.yaml", "", "mesh a.yaml b.yaml"}) {
+    const CommandResult r = run_rsw(args);
+    EXPECT_EQ(r.status, 2) << "rsw " << args << "\n" << r.output;
+  }
+  EXPECT_EQ(run_rsw("--help").status, 0);
+  EXPECT_EQ(run_rsw("simulate --help").status, 0);
+  EXPECT_EQ(run_rsw("--version").status, 0);
+}
+
 TEST(RswMesh, WritesMeshThatVtkReadsBackAndReportsWeldZoneSize) {
   const fs::path dir = fresh_dir("mesh");
   const CommandResult r = run_rsw("mesh " + paper_case + " -o " + dir.string());

@@ -117,6 +117,23 @@ TEST(Features, CliPrintsUndefinedFeaturesWithTheReasonAndExitsZero) {
   fs::remove_all(dir);
 }
 
+TEST(Features, CliWarnsOfAnImplausibleUnitAndStillPrintsTheFeatures) {
+  // The shipped signal with its current header rewritten to [A] over the kA numbers.
+  const fs::path dir = fresh_dir("ampere");
+  std::string text = read_file(shipped_signal);
+  const auto header = text.find("current [kA]");
+  ASSERT_NE(header, std::string::npos);
+  text.replace(header, 12, "current [A]");
+  const fs::path signal = write_file(dir / "ampere.csv", text);
+  const CommandResult r = run_rsw("features " + signal.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("rsw: warning: " + signal.string() + ": column 'current [A]' has a peak |I| of "),
+            std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(" A, outside 100 A .. 100 kA of a spot weld: kA?"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("  R_beta       resistance "), std::string::npos) << r.output;
+  fs::remove_all(dir);
+}
+
 TEST(Features, SignalWithoutCurrentPulseIsAClearError) {
   const fs::path dir = fresh_dir("no_pulse");
   std::string text = "time [ms], current [kA], voltage [V]\n";
@@ -138,6 +155,27 @@ TEST(Features, SignalWithoutCurrentPulseIsAClearError) {
   r = run_rsw("features " + short_file.string());
   EXPECT_NE(r.status, 0);
   EXPECT_NE(r.output.find("short.csv: a signal needs at least two data rows, found 1"), std::string::npos) << r.output;
+  fs::remove_all(dir);
+}
+
+TEST(StudyCli, UnknownStudyCommandNamesTheStudyCommandsAndExitsTwo) {
+  const CommandResult r = run_rsw("study rnu x.yaml");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("rsw: error: unknown command 'study rnu'; commands of 'study': run, "), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("(did you mean 'run'?)"), std::string::npos) << r.output;
+}
+
+TEST(Features, UnreadableOrWeldlessSignalFileIsBadInputExitTwo) {
+  const fs::path dir = fresh_dir("bad_input");
+  CommandResult r = run_rsw("features " + (dir / "missing.csv").string());
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("cannot open signal file"), std::string::npos) << r.output;
+  std::string text = "time [ms], current [kA], voltage [V]\n";
+  for (int k = 0; k < 50; ++k) text += std::to_string(k) + ", 0, 0\n";
+  r = run_rsw("features " + write_file(dir / "no_current.csv", text).string());
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("no current pulse"), std::string::npos) << r.output;
   fs::remove_all(dir);
 }
 
