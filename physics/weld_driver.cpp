@@ -339,7 +339,6 @@ void WeldDriver::account_energy(double I, double dt) {
   last_.current = I;
   if (I != 0.0) {
     const auto& sol = electrical_->solution();
-    result_.dynamic_resistance_peak = std::max(result_.dynamic_resistance_peak, sol.resistance);
     last_.voltage = sol.voltage;
     last_.electrical_energy += sol.voltage * I * dt;
     last_.bulk_power = sol.bulk_power;

@@ -181,7 +181,11 @@ void write_summary_json(const fs::path& file, const Problem& problem, const RunR
   for (const auto& [name, count] : result.thermal_linear_algebra) j["thermal_linear_algebra"][name] = count;
   for (const auto& [name, value] : result.nugget) j["nugget"][name] = value;
   for (const auto& [name, value] : result.energy) j["energy_J"][name] = value;
-  j["dynamic_resistance_peak_ohm"] = result.dynamic_resistance_peak;
+  // The same peak as `rsw simulate` prints: the largest V/I of the signals (output times).
+  if (const Signals::Peak peak = result.signals.maximum("resistance"); peak.found) {
+    j["dynamic_resistance_peak_ohm"] = peak.value;
+    j["dynamic_resistance_peak_time_s"] = peak.time;
+  }
   j["squeeze"]["electrode_displacement_m"] = result.squeeze_displacement;
   j["squeeze"]["indentation_m"] = result.squeeze_indentation;
   for (const auto& [name, r] : result.squeeze_contact_radius) j["squeeze"]["contact_radius_m"][name] = r;

@@ -17,6 +17,17 @@ int Signals::column(const std::string& name) const {
   return it == names.end() ? -1 : static_cast<int>(it - names.begin());
 }
 
+Signals::Peak Signals::maximum(const std::string& name) const {
+  const int c = column(name), t = column("time");
+  Peak peak;
+  if (c < 0 || t < 0) return peak;
+  for (std::size_t i = 0; i < n_rows(); ++i) {
+    const double value = columns[c][i];
+    if (std::isfinite(value) && (!peak.found || value > peak.value)) peak = {true, value, columns[t][i]};
+  }
+  return peak;
+}
+
 std::vector<double> weld_step_times(const Problem& problem) {
   const double end = problem.schedule.end_time();
   std::set<double> breaks{0.0, end};

@@ -53,6 +53,14 @@ struct Signals {
   std::vector<std::vector<double>> columns;
   int column(const std::string& name) const;  // -1 if absent
   std::size_t n_rows() const { return columns.empty() ? 0 : columns.front().size(); }
+  // The largest finite value of a column and its time (the first on ties); found is false
+  // if the column is absent or has no finite value. The one "peak" of a signal that the
+  // printout and summary.json both report.
+  struct Peak {
+    bool found = false;
+    double value = 0, time = 0;
+  };
+  Peak maximum(const std::string& name) const;
 };
 
 struct RunResult {
@@ -69,7 +77,6 @@ struct RunResult {
   int n_mechanics_substepped = 0;   // mechanics sub-steps made by halving (mechanics_stepper.hpp)
   int n_mechanics_loose = 0;        // smallest sub-steps accepted at a stalled residual (mechanics_stepper.hpp)
   int n_coupling_retries = 0;       // electro-thermal solves retried (electro_thermal_step.hpp)
-  double dynamic_resistance_peak = 0;  // Ω, the largest V/I over every weld step with current
   // Linear algebra of the mechanics (gmres_iterations, factorisations, surrogates,
   // lu_factorisations, cell_matrices_scattered, cell_matrices_reused; see
   // MechanicsSolverCounts).

@@ -42,15 +42,8 @@ double value_of(const std::vector<std::pair<std::string, double>>& values, const
 // resistance without current) are skipped.
 void print_signal_maximum(const physics::Signals& signals, const char* name, const char* label, double scale,
                           const char* unit) {
-  const int c = signals.column(name), t = signals.column("time");
-  if (c < 0 || t < 0) return;
-  int best = -1;
-  for (std::size_t i = 0; i < signals.n_rows(); ++i)
-    if (std::isfinite(signals.columns[c][i]) && (best < 0 || signals.columns[c][i] > signals.columns[c][best]))
-      best = static_cast<int>(i);
-  if (best >= 0)
-    std::printf("  %-28s %.4g %s at %.4g ms\n", label, signals.columns[c][best] * scale, unit,
-                signals.columns[t][best] * 1e3);
+  if (const physics::Signals::Peak peak = signals.maximum(name); peak.found)
+    std::printf("  %-28s %.4g %s at %.4g ms\n", label, peak.value * scale, unit, peak.time * 1e3);
 }
 
 // Key results of a finished weld: what a welding engineer looks at first.

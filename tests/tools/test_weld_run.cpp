@@ -207,6 +207,10 @@ TEST(WeldRun, SimulatePrintsKeyResultsAndProgressLinesForALog) {
   EXPECT_NEAR(std::stod(m[2]), j.at("nugget").at("h_n_liq").get<double>() * 1e3, 5e-4);
   ASSERT_TRUE(std::regex_search(out, m, std::regex(R"(energy: electrical ([0-9.]+) J = stored ([0-9.]+) J)"))) << out;
   EXPECT_NEAR(std::stod(m[1]), j.at("energy_J").at("electrical").get<double>(), 0.05);
+  // One peak resistance: summary.json's is the printed one, at the printed time.
+  EXPECT_NEAR(j.at("dynamic_resistance_peak_ohm").get<double>(), r_max, 1e-9 * r_max);  // signals.csv: 10 digits
+  ASSERT_TRUE(std::regex_search(out, m, std::regex(R"(dynamic resistance +([0-9.]+) uOhm at ([0-9.]+) ms)"))) << out;
+  EXPECT_NEAR(std::stod(m[2]), j.at("dynamic_resistance_peak_time_s").get<double>() * 1e3, 5e-4);
   EXPECT_NE(out.find("penetration: sheet_1 "), std::string::npos) << out;
 }
 
