@@ -3,6 +3,7 @@
 // number parse (reading CSV records: fem/csv.hpp); CSV cells, numbers as text, a text file.
 #pragma once
 
+#include <cstddef>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -14,6 +15,10 @@ std::string trim(const std::string& text);
 
 // ASCII lower case.
 std::string lower(std::string text);
+
+// Levenshtein distance: the fewest single-character insertions, deletions and
+// substitutions that turn `a` into `b` (for "did you mean" suggestions).
+std::size_t edit_distance(const std::string& a, const std::string& b);
 
 // Locale-independent parse of a whole field (std::from_chars, an optional leading '+');
 // false unless the field is exactly one finite number.

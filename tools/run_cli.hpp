@@ -11,6 +11,7 @@
 #pragma once
 
 #include "fem/config.hpp"
+#include "fem/text.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -25,23 +26,6 @@ namespace rsw::tools {
 inline constexpr int exit_done = 0;
 inline constexpr int exit_run_failed = 1;
 inline constexpr int exit_bad_input = 2;
-
-// Levenshtein distance: the fewest single-character insertions, deletions and
-// substitutions that turn `a` into `b`.
-inline std::size_t edit_distance(const std::string& a, const std::string& b) {
-  std::vector<std::size_t> row(b.size() + 1);
-  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
-  for (std::size_t i = 1; i <= a.size(); ++i) {
-    std::size_t diagonal = row[0];
-    row[0] = i;
-    for (std::size_t j = 1; j <= b.size(); ++j) {
-      const std::size_t above = row[j];
-      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
-      diagonal = above;
-    }
-  }
-  return row[b.size()];
-}
 
 // "unknown command 'simulat'; commands: mesh, simulate, ... (did you mean 'simulate'?)"
 // if the parse stopped at a word that names none of the subcommands where one was
@@ -62,7 +46,7 @@ inline std::string unknown_command_message(const CLI::App& app) {
   for (const CLI::App* command : commands) {
     const std::string& name = command->get_name();
     names += (names.empty() ? "" : ", ") + name;
-    const std::size_t distance = name.rfind(word, 0) == 0 ? 1 : edit_distance(word, name);
+    const std::size_t distance = name.rfind(word, 0) == 0 ? 1 : fem::edit_distance(word, name);
     if (distance < best) best = distance, closest = name;
   }
   return "unknown command '" + path + word + "'; " + (path.empty() ? "commands" : "commands of '" + path.substr(0, path.size() - 1) + "'") +
