@@ -82,7 +82,8 @@ struct SyntheticOptions {
   std::function<double(double)> temperature_curve = ::rsw::calibration::temperature;    // T(τ) [°C]
 };
 
-Signal synthetic_weld(const ResistanceShape& shape, const SyntheticOptions& options = {}) {
+// A weld whose dynamic resistance is R(τ), τ the time since the weld start.
+Signal synthetic_weld(const std::function<double(double)>& resistance_curve, const SyntheticOptions& options = {}) {
   const int n = static_cast<int>(std::lround(record_end / raw_step)) + 1;
   Eigen::VectorXd time(n), current(n), voltage(n), resistance(n), s(n), temp(n);
   for (int i = 0; i < n; ++i) {
@@ -90,7 +91,7 @@ Signal synthetic_weld(const ResistanceShape& shape, const SyntheticOptions& opti
     const double tau = t - weld_start;
     time[i] = t;
     current[i] = weld_current(t);
-    resistance[i] = shape.value(tau);
+    resistance[i] = resistance_curve(tau);
     voltage[i] = resistance[i] * current[i];
     s[i] = options.displacement_curve(tau);
     temp[i] = options.temperature_curve(tau);
@@ -105,6 +106,10 @@ Signal synthetic_weld(const ResistanceShape& shape, const SyntheticOptions& opti
   if (options.displacement) signal.add_column(signal_column::displacement, "m", s);
   if (options.temperature) signal.add_column(signal_column::temperature, "degC", temp);
   return signal;
+}
+
+Signal synthetic_weld(const ResistanceShape& shape, const SyntheticOptions& options = {}) {
+  return synthetic_weld([shape](double tau) { return shape.value(tau); }, options);
 }
 
 FeatureSettings half_current_threshold() {
@@ -454,6 +459,26 @@ TEST(DynamicResistance, PeakBelowAFallingStartIsTheMaximumAfterTheFirstMinimum) 
   expect_relative(features.at(f::resistance_alpha), dip.r0, 1e-9, "R_alpha");
   EXPECT_NEAR(features.at(f::time_alpha), dip.tau_a, 1e-9);
   expect_relative(features.at(f::resistance_rise), r_beta - dip.r0, 1e-8, "dR_1");
+}
+
+TEST(DynamicResistance, OfSeveralPeaksTheHighestIsBetaNotTheFirst) {
+  // R = r0 + a sin(2πτ/T) + bτ, T = 40 ms: peaks near τ = 10, 50 and 90 ms, each bT =
+  // 80 µΩ above the one before, inside the window [2, 98] ms. R rises at 2 ms, so β is
+  // the window's maximum, the last peak. The smoothing (cubic, 11 samples of 1 ms)
+  // passes bτ and scales the sine by g = Σ_k c_k cos(kω), ω = 2π · 1 ms/T,
+  // c_k = (267 − 15k²)/1287 (k = −5…5). Then R' = 0 at τ* = 90 ms + (T/2π) δ with
+  // sin δ = bT/(2π g a), and R_β = r0 + g a cos δ + bτ*.
+  const double r0 = 150e-6, a = 50e-6, b = 2e-3, period = 40e-3;
+  const Signal weld = synthetic_weld(
+      [&](double tau) { return r0 + a * std::sin(2 * M_PI * tau / period) + b * tau; });
+  const FeatureValues features = extract_features(weld, half_current_threshold());
+  namespace f = feature_name;
+  double gain = 0;
+  for (int k = -5; k <= 5; ++k) gain += (267.0 - 15.0 * k * k) / 1287.0 * std::cos(k * 2 * M_PI * 1e-3 / period);
+  const double delta = std::asin(b * period / (2 * M_PI * gain * a));
+  const double t_beta = 90e-3 + period / (2 * M_PI) * delta;
+  EXPECT_NEAR(features.at(f::time_beta), t_beta, 0.05e-3);
+  EXPECT_NEAR(features.at(f::resistance_beta), r0 + gain * a * std::cos(delta) + b * t_beta, 0.01e-6);
 }
 
 TEST(DynamicResistance, ResistanceStillRisingAtTheEndHasNoPeakAndSaysSo) {
