@@ -490,12 +490,7 @@ Observations read_features_file(const fs::path& file, const std::vector<std::str
 
   fem::CsvReader reader(in);
   std::vector<std::string> fields;
-  while (true) {
-    try {
-      if (!reader.next(fields)) break;
-    } catch (const fem::CsvError& error) {
-      throw ObservationError(name + ":" + std::to_string(reader.line_number()) + ": " + error.what());
-    }
+  while (reader.next_or_throw<ObservationError>(fields, name)) {
     const std::size_t line_number = reader.line_number();
     const std::string where = name + ":" + std::to_string(line_number) + ": ";
 

@@ -446,12 +446,7 @@ Signal read_signal_csv(const std::string& path, std::vector<std::string>& warnin
 
   fem::CsvReader reader(in);
   std::vector<std::string> fields;
-  while (true) {
-    try {
-      if (!reader.next(fields)) break;
-    } catch (const fem::CsvError& error) {
-      throw SignalError(where(reader.line_number()) + error.what());
-    }
+  while (reader.next_or_throw<SignalError>(fields, path)) {
     const std::size_t line_number = reader.line_number();
 
     if (columns.empty()) {

@@ -46,6 +46,15 @@ class CsvReader {
   // The next record's fields, false at the end of the input. The first record is the
   // header; its line fixes the delimiter. Throws CsvError as split_csv_line does.
   bool next(std::vector<std::string>& fields);
+  // next(), its CsvError rethrown as an Error whose message starts "<source>:<line>: ".
+  template <class Error>
+  bool next_or_throw(std::vector<std::string>& fields, const std::string& source) {
+    try {
+      return next(fields);
+    } catch (const CsvError& error) {
+      throw Error(source + ":" + std::to_string(line_number_) + ": " + error.what());
+    }
+  }
   // 1-based line of the record last returned.
   std::size_t line_number() const { return line_number_; }
   char delimiter() const { return delimiter_; }
