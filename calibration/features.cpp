@@ -28,14 +28,26 @@ std::string number(double value) {
   return out.str();
 }
 
-// Values of `column` linearly interpolated at t_ws + k·step, k = k_first..k_last.
-Eigen::VectorXd on_grid(const Signal& signal, const std::string& column, double t_ws,
-                        double step, long k_first, long k_last) {
-  Eigen::VectorXd values(k_last - k_first + 1);
-  for (long k = k_first; k <= k_last; ++k) {
-    values[k - k_first] =
-        interpolate_linear(signal.time(), signal.column(column), t_ws + static_cast<double>(k) * step);
-  }
+// The grid t_k = t_ws + k·step, k = first..last, of the points inside [lo, hi] (with
+// cell means: the points whose whole cell [t_k − step/2, t_k + step/2] is inside).
+struct Grid {
+  long first = 0, last = -1;
+  double step = 0, t_ws = 0;
+  double time(long k) const { return t_ws + static_cast<double>(k) * step; }
+};
+Grid grid_inside(double t_ws, double step, double lo, double hi, bool cell_means) {
+  const double margin = cell_means ? 0.5 * step : 0.0;
+  return {static_cast<long>(std::ceil((lo + margin - t_ws) / step - 1e-9)),
+          static_cast<long>(std::floor((hi - margin - t_ws) / step + 1e-9)), step, t_ws};
+}
+
+// Values of `column` on the grid: each the mean of the linearly interpolated samples
+// over its cell (signal.hpp, average_linear), or the value at t_k without cell means.
+Eigen::VectorXd on_grid(const Signal& signal, const std::string& column, const Grid& grid, bool cell_means) {
+  const double w = cell_means ? 0.5 * grid.step : 0.0;
+  Eigen::VectorXd values(grid.last - grid.first + 1);
+  for (long k = grid.first; k <= grid.last; ++k)
+    values[k - grid.first] = average_linear(signal.time(), signal.column(column), grid.time(k) - w, grid.time(k) + w);
   return values;
 }
 
@@ -54,31 +66,30 @@ void add_resistance_features(const Signal& signal, const WeldStage& stage, doubl
                              const FeatureSettings& settings, const SavitzkyGolayFilter& filter,
                              FeatureValues& features) {
   const double threshold = settings.weld_current_fraction * stage.peak_current;
-  const long n_stage = static_cast<long>(std::floor((stage.end - stage.start) / step + 1e-9));
-  if (n_stage < 1) {
+  const Grid grid = grid_inside(stage.start, step, stage.start, stage.end, settings.cell_means);
+  if (grid.last < grid.first + 1) {
     throw FeatureError("the weld stage lasts " + milliseconds(stage.end - stage.start) +
-                       ", less than one resampling step of " + milliseconds(step));
+                       ", too short for the resampling step of " + milliseconds(step));
   }
-  const Eigen::VectorXd current = on_grid(signal, signal_column::current, stage.start, step, 0, n_stage);
+  const Eigen::VectorXd current = on_grid(signal, signal_column::current, grid, settings.cell_means);
   Eigen::VectorXd resistance;
   if (signal.has_column(signal_column::resistance)) {
-    resistance = on_grid(signal, signal_column::resistance, stage.start, step, 0, n_stage);
+    resistance = on_grid(signal, signal_column::resistance, grid, settings.cell_means);
   } else {
-    resistance = on_grid(signal, signal_column::voltage, stage.start, step, 0, n_stage);
+    resistance = on_grid(signal, signal_column::voltage, grid, settings.cell_means);
     for (Eigen::Index k = 0; k < current.size(); ++k) {
       if (std::abs(current[k]) < 0.5 * threshold) {
         throw FeatureError("the current falls to " + number(current[k]) + " A at " +
-                           milliseconds(static_cast<double>(k) * step) +
+                           milliseconds(grid.time(grid.first + k) - stage.start) +
                            " after the weld start, below half the weld-stage threshold; "
                            "pulsed waveforms with current pauses are not supported");
       }
       resistance[k] /= current[k];
     }
   }
-  const SmoothCurve curve =
-      smooth_curve(resistance, stage.start, step, filter, "the weld stage");
+  const SmoothCurve curve = smooth_curve(resistance, grid.time(grid.first), step, filter, "the weld stage");
 
-  const double t_s = stage.start + settings.trim_margin;
+  const double t_s = std::max(stage.start + settings.trim_margin, curve.begin());
   const double t_e = std::min(stage.end - settings.trim_margin, curve.end());
   if (t_e - t_s < 4 * step) {
     throw FeatureError("the weld stage of " + milliseconds(stage.end - stage.start) +
@@ -147,13 +158,11 @@ SmoothCurve record_curve(const Signal& signal, const std::string& column, const 
   const Eigen::VectorXd& time = signal.time();
   const double record_end =
       std::min(time[time.size() - 1], stage.end + settings.post_weld_window);
-  const auto k_first = static_cast<long>(std::ceil((time[0] - stage.start) / step - 1e-9));
-  const auto k_last = static_cast<long>(std::floor((record_end - stage.start) / step + 1e-9));
-  if (k_last <= k_first) {
+  const Grid grid = grid_inside(stage.start, step, time[0], record_end, settings.cell_means);
+  if (grid.last <= grid.first) {
     throw FeatureError("the " + column + " record is shorter than one resampling step");
   }
-  return smooth_curve(on_grid(signal, column, stage.start, step, k_first, k_last),
-                      stage.start + static_cast<double>(k_first) * step, step, filter,
+  return smooth_curve(on_grid(signal, column, grid, settings.cell_means), grid.time(grid.first), step, filter,
                       "the " + column + " record");
 }
 

@@ -10,15 +10,21 @@
 //    data). If the current is above the threshold at the first (last) sample, the
 //    record starts (ends) inside the weld stage and t_ws (t_we) is that sample. Errors:
 //    no current column, zero current, or |I| ≥ f·I_peak everywhere (no pulse).
-// 2. Uniform resampling (linear interpolation of the raw samples) with step Δt = 1 ms
-//    on the grid t_ws + kΔt, anchored at the weld start; Savitzky–Golay smoothing
-//    (cubic, window 11; Savitzky & Golay 1964) of values and slopes. The window is
-//    counted in samples (paper §2.3), so the grid fixes its span (11 ms): simulated
-//    and measured signals share it whatever their own sampling, and are compared like
-//    for like. (With the raw step as grid, the default weld's R_beta was 243, 291 and
-//    302 µΩ from signals every 5, 1 and 0.25 ms.) Signals sampled more coarsely than
-//    the grid are interpolated between samples and lose what lies between them;
-//    signals sampled more finely are read at the grid points, not averaged. The
+// 2. Uniform resampling with step Δt = 1 ms on the grid t_ws + kΔt, anchored at the
+//    weld start: each grid value is the mean of the linearly interpolated samples over
+//    its cell [t_k − w, t_k + w], w = Δt/2, narrowed symmetrically at the ends of the
+//    weld stage (current, voltage, resistance) or of the record (so the first and last
+//    values are point values); R = V/I takes the means of V and I. Then Savitzky–Golay smoothing (cubic,
+//    window 11; Savitzky & Golay 1964) of values and slopes. The window is counted in
+//    samples (paper §2.3), so the grid fixes its span (11 ms): simulated and measured
+//    signals share it whatever their own sampling, and are compared like for like.
+//    Cell means, not values at the grid points: a finely sampled logger signal's
+//    noise and inverter ripple average out instead of aliasing onto the grid, and a
+//    fast drop of the simulated resistance (a ring of contact closing, docs/MODEL.md)
+//    moves a grid value in proportion to where in its cell it falls, so features vary
+//    continuously as parameters shift the drop's time; a simulation should then record
+//    its signals at every step (`output.interval: 0`). Signals sampled more coarsely
+//    than the grid are interpolated and lose what lies between their samples. The
 //    smoothed samples are joined into a C¹
 //    cubic Hermite SmoothCurve. Extrema, steepest points, means and line fits are
 //    computed on that curve, so they are not quantised to the sample grid.
@@ -134,6 +140,10 @@ const std::vector<std::string>& nugget_feature_names();
 struct FeatureSettings {
   double weld_current_fraction = 0.1;  // threshold f of |I| / I_peak for the weld stage
   double resample_step = 1e-3;         // Δt [s] of the feature grid; 0 takes the median step of the raw signal
+  // Grid values: means over the cells (default, step 2 above), or the interpolated
+  // values at the grid points (the paper's resampling; every feature of a cubic curve
+  // then has a closed form).
+  bool cell_means = true;
   int smoothing_window = 11;           // Savitzky–Golay window [samples]
   int smoothing_order = 3;             // Savitzky–Golay polynomial order
   double trim_margin = 2e-3;           // [s], trimmed at both ends of the weld stage

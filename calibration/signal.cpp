@@ -154,6 +154,26 @@ double interpolate_linear(const Eigen::VectorXd& time, const Eigen::VectorXd& va
   return (1 - weight) * values[k] + weight * values[k + 1];
 }
 
+double average_linear(const Eigen::VectorXd& time, const Eigen::VectorXd& values, double a, double b) {
+  const Eigen::Index n = time.size();
+  if (n == 0) throw SignalError("cannot average an empty signal");
+  if (!(b > a)) return interpolate_linear(time, values, a);
+  // ∫ over the parts before the first and after the last sample (constant values).
+  double integral = 0;
+  if (a < time[0]) integral += values[0] * (std::min(b, time[0]) - a);
+  if (b > time[n - 1]) integral += values[n - 1] * (b - std::max(a, time[n - 1]));
+  // Trapezoids of the segments [t_k, t_k+1] clipped to [a, b].
+  const Eigen::Index first = std::max<Eigen::Index>(
+      0, (std::upper_bound(time.data(), time.data() + n, a) - time.data()) - 1);
+  for (Eigen::Index k = first; k + 1 < n && time[k] < b; ++k) {
+    const double lo = std::max(a, time[k]), hi = std::min(b, time[k + 1]);
+    if (!(hi > lo)) continue;
+    const double slope = (values[k + 1] - values[k]) / (time[k + 1] - time[k]);
+    integral += (hi - lo) * (values[k] + slope * (0.5 * (lo + hi) - time[k]));
+  }
+  return integral / (b - a);
+}
+
 double median_step(const Eigen::VectorXd& time) {
   if (time.size() < 2) throw SignalError("a signal needs at least two samples");
   std::vector<double> steps(static_cast<std::size_t>(time.size() - 1));

@@ -84,6 +84,13 @@ class Signal {
 // [time(0), time(n−1)].
 double interpolate_linear(const Eigen::VectorXd& time, const Eigen::VectorXd& values, double t);
 
+// Mean of that interpolant over [a, b] (a < b), (1/(b − a)) ∫_a^b x(t) dt, exact for
+// the piecewise-linear x (outside the record x is clamped to its end values). a = b
+// gives the value at a. The feature extractor's grid values: a jump in the samples
+// between a and b moves the mean in proportion to where it lies, and a ripple whose
+// period divides b − a averages out instead of aliasing.
+double average_linear(const Eigen::VectorXd& time, const Eigen::VectorXd& values, double a, double b);
+
 // Median of the sample spacings of `time` (at least two samples).
 double median_step(const Eigen::VectorXd& time);
 

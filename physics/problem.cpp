@@ -331,13 +331,13 @@ void declare_output(ConfigSchema& s) {
   s.section("output", "What a run writes.");
   s.string("output.directory").default_value("results")
       .doc("Directory for the run's outputs, relative to the working directory; not empty.");
-  s.number("output.interval", "s", "ms").default_value("1 ms")
-      .range(Range::open_closed(0, 10000))
-      .doc("Time between output steps: a row of the signals (signals.csv, results.h5) at each. "
-           "Every output time is also a time step. The signal features are taken on a 1 ms grid "
-           "(calibration/features.hpp); signals sampled more coarsely lose the resistance peak "
-           "between samples (the default weld's R_beta: 297 uOhm from 1 ms, 274 uOhm from 5 ms "
-           "signals; docs/MODEL.md).");
+  s.number("output.interval", "s", "ms").default_value("0 ms")
+      .range(Range::closed(0, 10000))
+      .doc("Time between output steps: a row of the signals (signals.csv, results.h5) at each; "
+           "0 = a row at every time step. Every output time is also a time step. The signal "
+           "features average the signals over the cells of a 1 ms grid (calibration/features.hpp): "
+           "with a row at every step a fast resistance drop moves them continuously as the "
+           "parameters move it, where 1 ms rows make them jump (docs/MODEL.md).");
   s.number("output.field_interval", "s", "ms").default_value("5 ms")
       .range(Range::open_closed(0, 10000))
       .doc("Least time between field outputs (.vtu files for ParaView): fields are written at the "

@@ -87,7 +87,7 @@ struct SolverSettings {
 
 struct OutputSettings {
   std::string directory;
-  double interval{};        // s, between output steps (signals)
+  double interval{};        // s, between output steps (signals); 0: every time step
   double field_interval{};  // s, least time between field outputs
   bool fields{};            // write .vtu field files
 };

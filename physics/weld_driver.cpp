@@ -140,6 +140,7 @@ RunResult WeldDriver::fail(const std::string& message) {
 }
 
 bool WeldDriver::is_output_time(double t) const {
+  if (problem_.output.interval == 0) return true;  // every step
   return std::abs(t - next_output_ * problem_.output.interval) < 1e-9 || t >= times_.back() - 1e-12;
 }
 
@@ -450,7 +451,8 @@ std::string WeldDriver::weld_step(std::size_t k) {
   if (is_output_time(t)) {
     clock_.start("output");
     record(t);
-    while (next_output_ * problem_.output.interval <= t + 1e-9) ++next_output_;
+    if (problem_.output.interval > 0)
+      while (next_output_ * problem_.output.interval <= t + 1e-9) ++next_output_;
   }
   return {};
 }

@@ -88,7 +88,7 @@ class WeldDriver {
   // Copies the solvers' counters (Newton iterations, sub-steps, retries) into the result.
   void collect_counts();
   RunResult fail(const std::string& message);
-  // The next output time (every output.interval) or the last step.
+  // The next output time (every output.interval, every step if it is 0) or the last step.
   bool is_output_time(double t) const;
   // "weld stage, step k (t = … ms)", the prefix of every weld-stage message.
   std::string step_label(std::size_t k) const;

@@ -84,9 +84,11 @@ void ContactProfiles::add(double t, const std::vector<InterfaceState>& states) {
     for (const auto& st : states) names.push_back(st.name);
   radius.resize(states.size());
   pressure.resize(states.size());
+  gap.resize(states.size());
   for (std::size_t i = 0; i < states.size(); ++i) {
     radius[i].push_back(states[i].radius);
     pressure[i].push_back(states[i].pressure);
+    gap[i].push_back(states[i].gap);
   }
   times.push_back(t);
 }
@@ -128,6 +130,8 @@ void write_results_h5(const fs::path& file, const Problem& problem, const RunRes
     h5.set_attribute(g + "/radius", "unit", std::string("m"));
     h5.write(g + "/pressure", to_matrix(profiles.pressure[i]));
     h5.set_attribute(g + "/pressure", "unit", std::string("Pa"));
+    h5.write(g + "/gap", to_matrix(profiles.gap[i]));
+    h5.set_attribute(g + "/gap", "unit", std::string("m"));
   }
   for (const auto& [name, value] : result.nugget) {
     h5.write("/nugget/" + name, std::vector<double>{value});

@@ -48,7 +48,8 @@ class WeldFieldWriter {
 struct ContactProfiles {
   std::vector<double> times;  // s
   std::vector<std::string> names;
-  std::vector<std::vector<std::vector<double>>> radius, pressure;  // [interface][output time][point]
+  // [interface][output time][point]; gap > 0 open, NaN where a point has no partner
+  std::vector<std::vector<std::vector<double>>> radius, pressure, gap;
 
   void add(double t, const std::vector<InterfaceState>& states);
 };

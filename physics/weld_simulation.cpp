@@ -35,7 +35,8 @@ std::vector<double> weld_step_times(const Problem& problem) {
     for (double t : table->time)
       if (t > 0 && t < end) breaks.insert(t);
   const double interval = problem.output.interval;
-  for (int k = 1; k * interval < end - 1e-12; ++k) breaks.insert(k * interval);
+  if (interval > 0)
+    for (int k = 1; k * interval < end - 1e-12; ++k) breaks.insert(k * interval);
   const double early_end = problem.solver.early_phase_end;
   if (early_end > 0 && early_end < end) breaks.insert(early_end);
   // Merge boundaries closer than a nanosecond (rounding of unit conversions).

@@ -22,7 +22,7 @@
 // `partial/` and moves the files into the folder when it has finished: a failed run
 // leaves `failure.txt` (and `partial/`) and never a complete-looking result, old or
 // new. physics/weld_output.hpp lists the fields:
-//   results.h5    signals, squeeze history, contact pressure profiles at output times,
+//   results.h5    signals, squeeze history, contact pressure and gap profiles at output times,
 //                 nugget, energy, the resolved config, version, timing (h5py / h5dump)
 //   signals.csv   the signals, one row per output time, units in the header
 //   fields.pvd    ParaView time series of fields_NNNN.vtm

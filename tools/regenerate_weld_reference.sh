@@ -3,7 +3,7 @@
 #   tests/data/weld_coarse_reference.csv      WeldRun.CoarseRunMatchesStoredReference
 #       (eight signals every 10 ms, compared within 0.1 % of each signal's range)
 #   tests/data/weld_coarse_signals_exact.csv  WeldRun.CoarseRunSignalsAreBitIdenticalToTheStoredReference
-#       (every signal every 1 ms as hexadecimal floats, compared bit for bit)
+#       (every signal at every time step as hexadecimal floats, compared bit for bit)
 # Both are the paper's case on a coarse mesh (0.5 mm base, one refinement level) on one
 # thread. Run it only after a change that is meant to alter the results, and say why
 # in the commit.

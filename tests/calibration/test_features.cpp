@@ -75,6 +75,7 @@ double weld_current(double t) {
 }
 
 struct SyntheticOptions {
+  double step = raw_step;  // s, between raw samples
   bool voltage = true;  // else a resistance column
   bool displacement = true;
   bool temperature = true;
@@ -84,10 +85,10 @@ struct SyntheticOptions {
 
 // A weld whose dynamic resistance is R(τ), τ the time since the weld start.
 Signal synthetic_weld(const std::function<double(double)>& resistance_curve, const SyntheticOptions& options = {}) {
-  const int n = static_cast<int>(std::lround(record_end / raw_step)) + 1;
+  const int n = static_cast<int>(std::lround(record_end / options.step)) + 1;
   Eigen::VectorXd time(n), current(n), voltage(n), resistance(n), s(n), temp(n);
   for (int i = 0; i < n; ++i) {
-    const double t = i * raw_step;
+    const double t = i * options.step;
     const double tau = t - weld_start;
     time[i] = t;
     current[i] = weld_current(t);
@@ -112,9 +113,12 @@ Signal synthetic_weld(const ResistanceShape& shape, const SyntheticOptions& opti
   return synthetic_weld([shape](double tau) { return shape.value(tau); }, options);
 }
 
+// The closed forms below are for the values at the grid points (cell_means = false);
+// the cell means of the default have their own tests ("CellMeans").
 FeatureSettings half_current_threshold() {
   FeatureSettings settings;
   settings.weld_current_fraction = 0.5;
+  settings.cell_means = false;
   return settings;
 }
 
@@ -185,6 +189,40 @@ TEST(Resampling, LinearInterpolationOntoGridAnchoredAtAGivenTime) {
   EXPECT_THROW(Signal((Eigen::VectorXd(3) << 0.0, 1.0, 1.0).finished()), SignalError);
   EXPECT_THROW(signal.add_column("force", "N", Eigen::VectorXd::Zero(4)), SignalError);
   EXPECT_THROW(signal.column("voltage"), SignalError);
+}
+
+// x = {0, 2, 0, 4} at t = {0, 1, 2, 4}: over [0.5, 3] the trapezoids 0.5·1.5 + 1·1 + 1·1
+// = 2.75, mean 1.1; over [−1, 0.5] (0 before the record) 0 + 0.5·0.5 = 0.25, mean 1/6;
+// over [3, 6] (4 after it) 1·3 + 2·4 = 11, mean 11/3; a = b gives the value there.
+TEST(AverageLinear, IsExactForThePiecewiseLinearSignalAndClampsOutsideTheRecord) {
+  const Eigen::VectorXd t = (Eigen::VectorXd(4) << 0.0, 1.0, 2.0, 4.0).finished();
+  const Eigen::VectorXd x = (Eigen::VectorXd(4) << 0.0, 2.0, 0.0, 4.0).finished();
+  EXPECT_NEAR(average_linear(t, x, 0.5, 3.0), 1.1, 1e-15);
+  EXPECT_NEAR(average_linear(t, x, -1.0, 0.5), 1.0 / 6, 1e-15);
+  EXPECT_NEAR(average_linear(t, x, 3.0, 6.0), 11.0 / 3, 1e-15);
+  EXPECT_DOUBLE_EQ(average_linear(t, x, 3.0, 3.0), 2.0);
+}
+
+// A drop from 1 to 0 between the samples at d and d + h (h = 1 ms) inside the cell
+// [0, 1]: the mean is d + h/2, moving in proportion to d, where the value at a grid
+// point jumps from 1 to 0 as the drop passes it.
+TEST(AverageLinear, ADropInsideTheCellMovesTheMeanInProportionToItsPosition) {
+  const int n = 2001;
+  const Eigen::VectorXd t = Eigen::VectorXd::LinSpaced(n, -0.5, 1.5);  // h = 1e-3
+  for (const double d : {0.2, 0.5, 0.7}) {
+    const Eigen::VectorXd x = t.unaryExpr([d](double ti) { return ti <= d + 1e-9 ? 1.0 : 0.0; });
+    EXPECT_NEAR(average_linear(t, x, 0.0, 1.0), d + 0.5e-3, 1e-12) << d;
+  }
+}
+
+// sin(2π t/P) sampled 20 times a period: its interpolant is P-periodic, so its mean over
+// any window of one period is that over [0, P], the trapezoid sum of a full period: 0.
+TEST(AverageLinear, ARippleWhosePeriodIsTheWindowAveragesOut) {
+  const double period = 1e-3;
+  const int n = 201;
+  const Eigen::VectorXd t = Eigen::VectorXd::LinSpaced(n, 0.0, 10 * period);
+  const Eigen::VectorXd x = t.unaryExpr([&](double ti) { return std::sin(2 * M_PI * ti / period); });
+  for (const double a : {0.0, 1.23e-3, 4.5678e-3}) EXPECT_NEAR(average_linear(t, x, a, a + period), 0.0, 1e-13) << a;
 }
 
 // The Savitzky–Golay window counts samples, so the grid the signals are resampled on
@@ -338,6 +376,54 @@ TEST(DynamicResistance, FeaturesOfCubicCurveMatchClosedForm) {
   expect_relative(features.at(f::resistance_rise), r_beta - r_alpha, tolerance, "dR_1");
   expect_relative(features.at(f::resistance_drop), r_gamma - r_beta, tolerance, "dR_2");
   EXPECT_EQ(features.names().front(), f::resistance_alpha);
+}
+
+// Cell means of the default: for a cubic R sampled every h, the mean of the linear
+// interpolant over a cell of width Δ centred on t_k is exactly
+//   R(t_k) + c R''(t_k),  c = Δ²/24 (the cell) + h²/12 (the trapezoids),
+// itself a cubic, which the filter and the Hermite curve pass unchanged away from the
+// two end values (point values). R̃ = R + cR'' = r0 + k(s²u − u³/3 − 2cu), u = τ − τ_a:
+// its peak is at u = √(s² − 2c), its steepest rise still at u = 0 with R̃ = r0.
+TEST(CellMeans, OfACubicResistanceAddTheCurvatureOfTheCellAndOfTheSampling) {
+  const ResistanceShape shape;
+  FeatureSettings settings;
+  settings.weld_current_fraction = 0.5;
+  ASSERT_TRUE(settings.cell_means);
+  const FeatureValues features = extract_features(synthetic_weld(shape), settings);
+  const double c = 1e-6 / 24 + raw_step * raw_step / 12;
+  const double u = std::sqrt(shape.s * shape.s - 2 * c);
+  const double r_beta = shape.r0 + shape.k * (shape.s * shape.s * u - u * u * u / 3 - 2 * c * u);
+  namespace f = feature_name;
+  EXPECT_NEAR(features.at(f::time_beta), shape.tau_a + u, 1e-9);
+  expect_relative(features.at(f::resistance_beta), r_beta, 1e-9, "R_beta");
+  EXPECT_NEAR(features.at(f::time_alpha), shape.tau_a, 1e-9);
+  expect_relative(features.at(f::resistance_alpha), shape.r0, 1e-9, "R_alpha");
+  // The shift is real: the values at the grid points give R(τ_a + s).
+  EXPECT_GT(std::abs(r_beta - shape.value(shape.tau_a + shape.s)), 1e-6 * r_beta);
+}
+
+// Inverter ripple on R: 1 kHz, 20 µΩ, sampled every 0.05 ms. Cell means over the 1 ms
+// grid average it out of every interior value, so the peak and inflection features
+// equal the ripple-free weld's; the values at the grid points see sin(φ) of every
+// period, a constant offset A sin φ on R_β (aliasing).
+TEST(CellMeans, InverterRippleAtTheGridFrequencyLeavesThePeakFeaturesUnmoved) {
+  const ResistanceShape shape;
+  const double amplitude = 20e-6, phase = 0.3;
+  SyntheticOptions fine;
+  fine.step = 0.05e-3;
+  const Signal clean = synthetic_weld(shape, fine);
+  const Signal ripple = synthetic_weld(
+      [&](double tau) { return shape.value(tau) + amplitude * std::sin(2 * M_PI * 1e3 * tau + phase); }, fine);
+  FeatureSettings means;
+  means.weld_current_fraction = 0.5;
+  namespace f = feature_name;
+  const FeatureValues a = extract_features(clean, means), b = extract_features(ripple, means);
+  for (const char* name : {f::resistance_beta, f::time_beta, f::resistance_alpha, f::time_alpha})
+    EXPECT_NEAR(b.at(name), a.at(name), 1e-9 * std::abs(a.at(name))) << name;
+  const FeatureSettings points = half_current_threshold();
+  const double offset = extract_features(ripple, points).at(f::resistance_beta) -
+                        extract_features(clean, points).at(f::resistance_beta);
+  EXPECT_NEAR(offset, amplitude * std::sin(phase), 1e-3 * amplitude);
 }
 
 TEST(DynamicResistance, InflectionAndPeakTimesAreNotQuantisedToTheSampleGrid) {

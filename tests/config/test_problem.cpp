@@ -111,7 +111,7 @@ TEST(Problem, PaperCaseGivesDocumentedValuesInSi) {
   EXPECT_DOUBLE_EQ(p.thermal.melt_conductivity, 117.5);
 
   EXPECT_EQ(p.output.directory, "results");
-  EXPECT_DOUBLE_EQ(p.output.interval, 0.001);
+  EXPECT_DOUBLE_EQ(p.output.interval, 0.0);  // every step
   EXPECT_DOUBLE_EQ(p.output.field_interval, 0.005);
   EXPECT_TRUE(p.output.fields);
 }

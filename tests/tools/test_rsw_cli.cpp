@@ -124,7 +124,7 @@ TEST(RswSimulate, SqueezeRunWritesReadableResultsAndFields) {
   rsw::fem::Hdf5File h5(dir / "results.h5", rsw::fem::Hdf5Mode::read);
   const auto time = h5.read_doubles("/signals/time");
   const auto force = h5.read_doubles("/signals/force");
-  ASSERT_EQ(time.size(), 11u);  // signals every 1 ms (output.interval), 0 to 10 ms
+  ASSERT_EQ(time.size(), 41u);  // signals at every step (output.interval 0): 0.25 ms steps, 0 to 10 ms
   EXPECT_DOUBLE_EQ(time.back(), 0.01);
   EXPECT_NEAR(force.back(), 3000.0, 1e-6);
   EXPECT_NE(h5.read_string("/run/config").find("squeeze_only"), std::string::npos);

@@ -14,6 +14,6 @@ data=validation/twin/data
 mkdir -p "$data"
 OMP_NUM_THREADS=${OMP_NUM_THREADS:-1} "$rsw" simulate validation/paper_case/weld.yaml -q -o "$data/truth" \
   --set mesh.base_size=0.5mm --set mesh.weld_zone.levels=1 \
-  --set output.interval=1ms --set output.fields=false \
+  --set output.interval=0ms --set output.fields=false \
   --set contact.electrode_sheet.htc_p1=0.02
 /usr/bin/python3 validation/twin/add_noise.py "$data/truth" "$data" --replicates 5 --seed 20250301 --rsw "$rsw"
