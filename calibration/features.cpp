@@ -113,11 +113,16 @@ void add_resistance_features(const Signal& signal, const WeldStage& stage, doubl
   const bool falls_throughout = !valley || valley->time >= t_e - tolerance;
   const CurvePoint beta = falls_throughout ? window.maximum() : window.trimmed(valley->time, t_e).maximum();
   const bool rises_at_end = !falls_throughout && beta.time >= t_e - tolerance;
-  if (falls_throughout || beta.time <= valley->time + tolerance || rises_at_end) {
+  // A peak stands above both ends of its search by more than round-off.
+  const bool flat = !falls_throughout && !rises_at_end &&
+                    !(beta.value - std::max(valley->value, r_gamma) > 1e-9 * std::abs(beta.value));
+  if (falls_throughout || beta.time <= valley->time + tolerance || rises_at_end || flat) {
     const std::string why =
         "the dynamic resistance has no peak inside the trimmed weld stage [" + milliseconds(t_s - stage.start) +
         ", " + milliseconds(t_e - stage.start) + "]; " +
-        (rises_at_end ? "its maximum is at the end: it still rises at the end" : "it falls over the whole stage");
+        (rises_at_end ? "its maximum is at the end: it still rises at the end"
+         : flat       ? "it is flat: its highest point is within 1e-9 of its value of both ends"
+                      : "it falls over the whole stage");
     for (const char* name : {f::resistance_beta, f::time_beta, f::resistance_alpha, f::time_alpha,
                              f::slope_before_peak, f::slope_after_peak, f::resistance_rise, f::resistance_drop}) {
       reason[name] = why;

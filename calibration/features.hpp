@@ -58,15 +58,17 @@
 //      T_max = max T over the record, t_T_max its time; T_end = T at the record end;
 //      T_dot_cool = (T_end − T_max)/(t_end − t_T_max) [K/s], negative while cooling.
 // 6. Nugget scalars (d_n_liq, ...) are passed through unchanged when given.
-// The record end is the last grid sample at or before min(last sample, t_we +
-// post_weld_window). A group whose column is absent is left out.
+// The record end is the last grid point whose cell ends at or before min(last sample,
+// t_we + post_weld_window) (the point itself without cell means). A group whose
+// column is absent is left out.
 //
 // Undefined features. A valid signal whose curve has an unusual shape leaves some
 // features without a definition; those, and only those, are reported as NaN with the
 // reason, and every other feature keeps its value (a study or calibration decides per
 // feature what to do with a NaN, instead of losing the whole weld):
 //   - no resistance peak inside [t_s, t_e] (R falls over the whole window, or its
-//     maximum after t_v is at t_e: R still rises at the end): R_beta, t_beta, R_alpha,
+//     maximum after t_v is at t_e: R still rises at the end; or R is flat, its
+//     maximum less than 1e-9 of its value above both ends): R_beta, t_beta, R_alpha,
 //     t_alpha, m_1, m_2, dR_1, dR_2 are undefined; R_gamma, t_gamma and R_m are defined;
 //   - an interior peak but no rise before it (max dR/dt ≤ 0 on [t_v, t_β]): R_alpha,
 //     t_alpha, m_1, dR_1 are undefined;

@@ -21,6 +21,7 @@
 #include <functional>
 #include <optional>
 #include <limits>
+#include <map>
 #include <random>
 #include <sstream>
 #include <string>
@@ -565,6 +566,73 @@ TEST(DynamicResistance, OfSeveralPeaksTheHighestIsBetaNotTheFirst) {
   const double t_beta = 90e-3 + period / (2 * M_PI) * delta;
   EXPECT_NEAR(features.at(f::time_beta), t_beta, 0.05e-3);
   EXPECT_NEAR(features.at(f::resistance_beta), r0 + gain * a * std::cos(delta) + b * t_beta, 0.01e-6);
+}
+
+// Expulsion: molten metal leaves the nugget and R drops at once, here by D = 30 µΩ at
+// τ_x = 85 ms, after the cubic's peak at 70 ms. The drop reaches the smoothed curve
+// only through the grid values whose cells it falls in or after (τ ≥ 84.5 ms) and the
+// filter's half-width of 5 samples, so the peak and the inflection keep their
+// closed-form values (point values, exact) and R_γ at 98 ms, more than 5.5 ms after
+// the drop, is R(98 ms) − D.
+TEST(DynamicResistance, ExpulsionDropAfterThePeakLowersOnlyTheEndResistance) {
+  const ResistanceShape shape;
+  const double drop = 30e-6, tau_x = 85e-3;
+  const Signal weld = synthetic_weld([&](double tau) { return shape.value(tau) - (tau > tau_x ? drop : 0.0); });
+  namespace f = feature_name;
+  const FeatureValues features = extract_features(weld, half_current_threshold());
+  expect_relative(features.at(f::resistance_beta), shape.value(shape.tau_a + shape.s), 1e-9, "R_beta");
+  EXPECT_NEAR(features.at(f::time_beta), shape.tau_a + shape.s, 1e-9);
+  expect_relative(features.at(f::resistance_alpha), shape.r0, 1e-9, "R_alpha");
+  expect_relative(features.at(f::resistance_gamma), shape.value(98e-3) - drop, 1e-9, "R_gamma");
+  // The cell means of the default see the same: the drop's cells lie after 79.5 ms.
+  FeatureSettings means;
+  means.weld_current_fraction = 0.5;
+  const FeatureValues averaged = extract_features(weld, means);
+  const FeatureValues clean = extract_features(synthetic_weld(shape), means);
+  EXPECT_NEAR(averaged.at(f::resistance_beta), clean.at(f::resistance_beta), 1e-9 * clean.at(f::resistance_beta));
+  EXPECT_NEAR(averaged.at(f::resistance_gamma), clean.at(f::resistance_gamma) - drop, 1e-9 * clean.at(f::resistance_gamma));
+}
+
+// A flat curve (a weld whose resistance does not change) has no peak: β and the
+// features built on it are undefined with the reason, γ and the mean are the value.
+TEST(DynamicResistance, FlatCurveHasNoPeakAndKeepsItsValue) {
+  const double r0 = 120e-6;
+  const FeatureValues features = extract_features(synthetic_weld([&](double) { return r0; }), FeatureSettings{});
+  namespace f = feature_name;
+  EXPECT_TRUE(std::isnan(features.at(f::resistance_beta)));
+  EXPECT_NE(features.undefined_reason(f::resistance_beta).find("no peak"), std::string::npos)
+      << features.undefined_reason(f::resistance_beta);
+  EXPECT_NEAR(features.at(f::resistance_gamma), r0, 1e-15);
+  EXPECT_NEAR(features.at(f::resistance_mean), r0, 1e-15);
+}
+
+// White logger noise of sd σ = 10 µΩ sampled at 50 kHz (h = 0.02 ms; 5 kHz and above):
+// a cell mean of the 50 samples in 1 ms has sd ≈ σ/√50, the filter's value at a point
+// sd √(89/429) of that, so R_β moves by at most 4 · 0.46 σ/√50 ≈ 2.6 µΩ (4 sd) from
+// the clean curve's; point values keep sd 0.46 σ per smoothed value, and the peak of a
+// noisy curve is biased upwards.
+TEST(CellMeans, WhiteNoiseAtFiftyKilohertzMovesThePeakByLessThanItsAveragedSpread) {
+  const ResistanceShape shape;
+  const double sigma = 10e-6;
+  SyntheticOptions fine;
+  fine.step = 0.02e-3;
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> noise(0.0, sigma);
+  std::map<long, double> draws;  // one draw per raw sample time
+  const Signal noisy = synthetic_weld(
+      [&](double tau) {
+        const long i = std::lround(tau / fine.step);
+        auto it = draws.find(i);
+        if (it == draws.end()) it = draws.emplace(i, noise(rng)).first;
+        return shape.value(tau) + it->second;
+      },
+      fine);
+  FeatureSettings means;
+  means.weld_current_fraction = 0.5;
+  namespace f = feature_name;
+  const double clean = extract_features(synthetic_weld(shape, fine), means).at(f::resistance_beta);
+  const double averaged = extract_features(noisy, means).at(f::resistance_beta);
+  EXPECT_LT(std::abs(averaged - clean), 4 * std::sqrt(89.0 / 429.0) * sigma / std::sqrt(50.0));
 }
 
 TEST(DynamicResistance, ResistanceStillRisingAtTheEndHasNoPeakAndSaysSo) {
