@@ -95,6 +95,11 @@ class ForwardModel {
   // serialise internally.
   virtual EvaluationResult evaluate(const Eigen::VectorXd& theta_physical) const = 0;
 
+  // Checks, without running it, that the model takes θ (physical) as input: throws
+  // fem::ConfigError naming what is wrong (a key's range, an invalid case). The default
+  // takes every θ. Studies and calibrations call it before their first run.
+  virtual void check_input(const Eigen::VectorXd& theta_physical) const {}
+
   // Runs the model at θ (physical) and writes its signals as <folder>/signals.csv
   // (comma-separated, a "name [unit]" header, rows in time order), and whatever else a
   // run produces, into `folder` (created; an existing folder is replaced). Must not

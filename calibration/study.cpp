@@ -519,6 +519,38 @@ std::string Study::model_fingerprint() const {
   return text.str();
 }
 
+void Study::check_model_inputs(const ForwardModel& model, const Eigen::MatrixXd& points) const {
+  const std::size_t d = parameters_.n_parameters();
+  auto describe = [&](const Eigen::VectorXd& theta) {
+    std::ostringstream text;
+    text.precision(6);
+    for (std::size_t i = 0; i < d; ++i)
+      text << (i ? ", " : "") << parameters_.parameter(i).name << " = " << theta[static_cast<Eigen::Index>(i)];
+    return text.str();
+  };
+  auto check = [&](const Eigen::VectorXd& theta, const std::string& where) {
+    try {
+      model.check_input(theta);
+    } catch (const std::exception& e) {
+      throw fem::ConfigError("study '" + name_ + "': the model does not take " + where + " (" + describe(theta) +
+                             "): " + e.what() + "; nothing was run");
+    }
+  };
+  // Each parameter at the ends of its prior (the 1e-6 and 1 - 1e-6 quantiles, the bounds
+  // of a bounded prior to within that), the others at their medians.
+  Eigen::VectorXd median(static_cast<Eigen::Index>(d));
+  for (std::size_t i = 0; i < d; ++i) median[static_cast<Eigen::Index>(i)] = parameters_.parameter(i).prior.quantile(0.5);
+  check(median, "the prior's medians");
+  for (std::size_t i = 0; i < d; ++i) {
+    for (const double u : {1e-6, 1 - 1e-6}) {
+      Eigen::VectorXd theta = median;
+      theta[static_cast<Eigen::Index>(i)] = parameters_.parameter(i).prior.quantile(u);
+      check(theta, parameters_.parameter(i).name + (u < 0.5 ? " at its prior's lower end" : " at its prior's upper end"));
+    }
+  }
+  for (Eigen::Index r = 0; r < points.rows(); ++r) check(points.row(r).transpose(), "design point " + std::to_string(r));
+}
+
 StudyDesign Study::design() const {
   StudyDesign design;
   design.model = model_fingerprint();

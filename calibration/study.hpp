@@ -112,6 +112,13 @@ class Study {
   // model_fingerprint() as model).
   StudyDesign design() const;
 
+  // The dry check before a study or calibration spends runs: `model`'s check_input at
+  // the prior's ends, each parameter in turn at its lowest and highest value (the
+  // (1e-9, 1 − 1e-9) quantiles) with the others at their medians, and at every row of
+  // `points` (physical θ, e.g. the design). Throws fem::ConfigError naming the study,
+  // the parameter values and the model's reason; nothing has run then.
+  void check_model_inputs(const ForwardModel& model, const Eigen::MatrixXd& points = {}) const;
+
  private:
   Study(fem::Config config, std::filesystem::path file);
 

@@ -182,6 +182,7 @@ void run_calibrate(const CalibrateOptions& options, const ForwardModelFactory& f
     std::printf("calibration %s: warning: %s\n", study.name().c_str(), warning.c_str());
   const cal::GaussianLikelihood likelihood = cal::make_likelihood(study, settings, observations);
   const std::unique_ptr<cal::ForwardModel> model = make_forward_model(study, factory);
+  study.check_model_inputs(*model);  // the runs go anywhere in the prior
 
   const fs::path output = study.output_folder();
   const fs::path calibration_folder = output / (study.name() + "_calibration");

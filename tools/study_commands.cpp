@@ -191,11 +191,13 @@ void run_study(const StudyOptions& options, const ForwardModelFactory& factory) 
   farm_options.progress = options.quiet ? nullptr : &std::cerr;
   farm_options.started_by_mpi_launcher = started_by_mpi_launcher();
   const std::unique_ptr<cal::ForwardModel> model = make_forward_model(study, factory);
+  const cal::StudyDesign design = study.design();
+  study.check_model_inputs(*model, design.points);
   const fs::path file = cal::task_results_file(study.results_file(), farm_options.task);
   fem::OutputFolder output = claim_study_folder(study, "study", options.overwrite, {file.filename().string()});
   output.check({file.filename().string()});
   output.record(file.filename().string());
-  cal::EvaluationFarm farm(*model, study.design(), file, farm_options);
+  cal::EvaluationFarm farm(*model, design, file, farm_options);
   const cal::FarmSummary summary = farm.run();
   if (!summary.writer) return;  // other MPI ranks: rank 0 reports
 
@@ -215,6 +217,9 @@ void run_study(const StudyOptions& options, const ForwardModelFactory& factory) 
   if (farm_options.task.is_whole()) {
     for (const auto& table : write_run_tables(study, results, output))
       std::cout << "  table: " << table.string() << "\n";
+    if (summary.n_ok == 0 && summary.n_failed > 0)
+      throw std::runtime_error("study '" + study.name() + "': every one of its " + std::to_string(summary.n_failed) +
+                               " runs failed (reasons above and in the run table)");
   } else {
     std::cout << "  when every task is done: rsw study merge " << options.study_file << " "
               << cal::task_results_file(study.results_file(), cal::TaskPartition{0, farm_options.task.count}).string()

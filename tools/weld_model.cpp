@@ -48,6 +48,8 @@ fem::Config WeldForwardModel::config_at(const Eigen::VectorXd& theta) const {
   return config;
 }
 
+void WeldForwardModel::check_input(const Eigen::VectorXd& theta) const { physics::make_problem(config_at(theta)); }
+
 calibration::EvaluationResult WeldForwardModel::evaluate(const Eigen::VectorXd& theta) const {
   fs::path dir;
   try {

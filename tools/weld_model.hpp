@@ -31,6 +31,9 @@ class WeldForwardModel : public calibration::ForwardModel {
   std::vector<std::string> parameter_names() const override;
   std::vector<std::string> feature_names() const override;
   calibration::EvaluationResult evaluate(const Eigen::VectorXd& theta) const override;
+  // The case with its overrides and θ builds a weld problem (every key in its range,
+  // the geometry consistent); no mesh, no run.
+  void check_input(const Eigen::VectorXd& theta) const override;
   // Writes <folder>/signals.csv (and results.h5, summary.json); a failed run leaves
   // <folder>/failure.txt and is returned as a failure.
   calibration::SignalOutput simulate_signals(const Eigen::VectorXd& theta,

@@ -849,7 +849,7 @@ TEST(CalibrationStudy, TwinStudiesLoad) {
   EXPECT_EQ(multi_settings.observation_source, ObservationSource::features_file);
   EXPECT_EQ(multi_settings.noise.kind, ObservationNoise::Kind::ReplicateScatter);
   EXPECT_EQ(multi.model_overrides(),
-            std::vector<std::string>({"mesh.base_size=0.5 mm", "mesh.weld_zone.levels=1", "output.interval=1 ms",
+            std::vector<std::string>({"mesh.base_size=0.5 mm", "mesh.weld_zone.levels=1", "output.interval=0 ms",
                                       "output.fields=false"}));
 }
 

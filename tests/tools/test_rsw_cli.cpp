@@ -11,6 +11,7 @@
 #include <array>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <string>
 
@@ -314,4 +315,63 @@ TEST(RswSimulateOutput, SecondProcessIntoAFolderARunIsWritingIsRefusedAtItsStart
   fs::remove_all(dir);
   fs::remove(log);
   fs::remove(rc);
+}
+
+// Studies and calibrations check the weld model before they spend runs: every
+// parameter at both ends of its prior and every design point must give a valid case.
+namespace {
+fs::path write_weld_study(const fs::path& dir, const std::string& parameter, const std::string& set,
+                          const std::string& calibration = "") {
+  fs::create_directories(dir);
+  const fs::path file = dir / "study.yaml";
+  std::ofstream(file) << "study: {name: dry, output: out}\nparameters:\n  - " << parameter
+                      << "\ndesign: {kind: lhs, n_points: 3, seed: 1}\nfeatures: [{name: R_beta}]\nmodel:\n  case: "
+                      << RSW_SOURCE_DIR << "/validation/paper_case/weld.yaml\n  set: " << set << "\n"
+                      << calibration;
+  return file;
+}
+const std::string p1_parameter =
+    "{name: p1, config_key: contact.electrode_sheet.htc_p1, unit: \"1\", prior: log10_uniform, lower: 1e-3, upper: 1e-1}";
+}  // namespace
+
+TEST(RswStudy, BadModelOverrideIsRefusedBeforeAnyRunWithExitTwo) {
+  const fs::path dir = fresh_dir("dry_set");
+  const fs::path study = write_weld_study(dir, p1_parameter, "[{key: mesh.weld_zone.levels, value: \"9\"}]");
+  const CommandResult r = run_rsw("study run " + study.string() + " -q --workers 1");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("mesh.weld_zone.levels"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("allowed: [0, 4]"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("nothing was run"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "out")) << r.output;
+  fs::remove_all(dir);
+}
+
+TEST(RswStudy, PriorReachingOutsideAKeysRangeIsRefusedNamingTheParameterAndEnd) {
+  const fs::path dir = fresh_dir("dry_prior");
+  const fs::path study = write_weld_study(
+      dir, "{name: lambda_m, config_key: thermal.melt_conductivity, unit: W/(m*K), prior: uniform, lower: -5, upper: 100}",
+      "[]");
+  const CommandResult r = run_rsw("study run " + study.string() + " -q --workers 1");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("lambda_m at its prior's lower end"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("thermal.melt_conductivity"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "out")) << r.output;
+  fs::remove_all(dir);
+}
+
+TEST(RswCalibrate, PriorReachingOutsideAKeysRangeIsRefusedBeforeAnyRun) {
+  const fs::path dir = fresh_dir("dry_calibrate");
+  fs::create_directories(dir);
+  std::ofstream(dir / "features.csv") << "R_beta [uohm]\n300\n";
+  const fs::path study = write_weld_study(
+      dir, "{name: lambda_m, config_key: thermal.melt_conductivity, unit: W/(m*K), prior: uniform, lower: -5, upper: 100}",
+      "[]",
+      "calibration:\n  observations: {features_file: features.csv}\n  noise:\n    kind: standard_deviations\n"
+      "    standard_deviations: [{feature: R_beta, value: 6 uohm}]\n  method: emulator\n");
+  const CommandResult r = run_rsw("calibrate " + study.string() + " --workers 1");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("lambda_m at its prior's lower end"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("nothing was run"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "out" / "dry_calibration")) << r.output;
+  fs::remove_all(dir);
 }

@@ -215,6 +215,19 @@ TEST(StudyCli, RunResumeAndSensitivityWriteTables) {
   fs::remove_all(dir);
 }
 
+// A study whose every run failed is not a success: the run table is written, with the
+// reasons, and the command exits 1 saying so.
+TEST(StudyCli, EveryRunFailedExitsOneAfterWritingTheTable) {
+  const fs::path dir = fresh_dir("all_failed");
+  const fs::path study = write_lhs_study(dir, "all_failed", 4);
+  write_file(dir / "case.yaml", "analytic: {function: smooth, fail_above: -1}\n");
+  const CommandResult r = run_rsw("study run " + study.string() + " -q --workers 1 -o " + (dir / "out").string());
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("every one of its 4 runs failed"), std::string::npos) << r.output;
+  EXPECT_TRUE(fs::exists(dir / "out" / "all_failed_runs.csv")) << r.output;
+  fs::remove_all(dir);
+}
+
 TEST(StudyCli, RunWithUndefinedFeaturesIsOkAndTablesShowNanAndWhy) {
   // The analytic model leaves its first feature (R_beta) undefined (NaN) for a > 0.5.
   const fs::path dir = fresh_dir("undefined_runs");
