@@ -325,6 +325,12 @@ void declare_solver(ConfigSchema& s) {
            "melts: sticking, outside what the model represents): continue records a warning with "
            "the time, place and temperature in summary.json and results.h5 and goes on (outputs "
            "stay continuous in the parameters, which calibration needs); stop fails the run there.");
+  s.integer("solver.max_cells").default_value("100000")
+      .range(Range::closed(1, 1e9))
+      .doc("Refuse a mesh of more cells (estimated; a run needs 35 MB + 21 kB per cell). The paper's has 7700.");
+  s.integer("solver.max_steps").default_value("100000")
+      .range(Range::closed(1, 1e9))
+      .doc("Refuse a weld stage of more time steps (an upper bound). The default takes 220.");
 }
 
 void declare_output(ConfigSchema& s) {
@@ -477,6 +483,58 @@ double case_default(const std::string& key) {
   return defaults.number(key);
 }
 
+// Resource guards, before anything is allocated. Cells: the weld zone's r–z area over
+// the square of its finest edge (base/2^levels), the refinement boxes' likewise, and the
+// rest of the sheets' and the electrodes' r–z rectangles over the base size squared; the
+// cone, dome and bore make the real counts of the paper's case about 1.3 times smaller
+// (1184, 7700 and 29 958 cells at base 0.5/1 level, 0.25/2 and 0.125/2: estimates 1600,
+// 9856, 39 424). Steps: an upper bound, the steps of the largest sizes plus one per
+// output time and table breakpoint that may fall between them.
+static void check_resources(const Config& config, const Problem& problem) {
+  const meshes::MeshSettings& mesh = problem.mesh;
+  const meshes::StackGeometry& stack = problem.geometry;
+  const double zone_area = mesh.weld_zone_radius * (stack.stack_height() + 2 * mesh.weld_zone_electrode_depth);
+  const double h_zone = mesh.base_size / std::pow(2.0, mesh.weld_zone_levels);
+  const double outer_area = stack.sheet_radius * stack.stack_height() + stack.upper.cap_diameter / 2 * stack.upper.length +
+                            stack.lower.cap_diameter / 2 * stack.lower.length - zone_area;
+  double cells = zone_area / (h_zone * h_zone) + std::max(outer_area, 0.0) / (mesh.base_size * mesh.base_size);
+  for (const auto& box : mesh.extra_boxes) {
+    const double h = mesh.base_size / std::pow(2.0, box.levels);
+    cells += (box.r_max - box.r_min) * (box.z_max - box.z_min) / (h * h);
+  }
+  const double max_cells = config.integer("solver.max_cells");
+  if (cells > max_cells) {
+    char text[400];
+    std::snprintf(text, sizeof text,
+                  "the mesh would have about %.3g cells (weld-zone edge %.3g mm), more than solver.max_cells = "
+                  "%.0f; a run would need about %.1f GB of memory. Coarsen the mesh, or raise solver.max_cells "
+                  "if this machine has the memory",
+                  cells, h_zone * 1e3, max_cells, (35e6 + 21e3 * cells) / 1e9);
+    fail_keys(config, {"mesh.base_size", "mesh.weld_zone.levels", "solver.max_cells"}, text);
+  }
+  const SolverSettings& solver = problem.solver;
+  const double end = problem.schedule.end_time();
+  const double early_end = solver.early_phase_end > 0 ? std::min(solver.early_phase_end, end) : 0.0;
+  const double early_steps = std::ceil(early_end / std::min(solver.time_step, solver.early_time_step));
+  const double late_steps = std::ceil((end - early_end) / solver.time_step);
+  const double output_steps = problem.output.interval > 0 ? std::floor(end / problem.output.interval) : 0.0;
+  const double steps = early_steps + late_steps + output_steps + 2.0 +
+                       static_cast<double>(problem.schedule.current.time.size() + problem.schedule.force.time.size());
+  const double max_steps = config.integer("solver.max_steps");
+  if (steps > max_steps) {
+    char text[400];
+    std::snprintf(text, sizeof text,
+                  "the weld stage of %.4g ms would take up to %.3g time steps, more than solver.max_steps = %.0f; "
+                  "lengthen the steps or the output interval, or raise solver.max_steps",
+                  end * 1e3, steps, max_steps);
+    // Blame the largest contribution first.
+    std::vector<std::pair<double, std::string>> parts = {
+        {early_steps, "solver.early_time_step"}, {late_steps, "solver.time_step"}, {output_steps, "output.interval"}};
+    std::sort(parts.begin(), parts.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+    fail_keys(config, {parts[0].second, parts[1].second, parts[2].second, "solver.max_steps"}, text);
+  }
+}
+
 Problem make_problem(const Config& config) {
   Problem problem;
   problem.name = config.text("case.name");
@@ -593,6 +651,7 @@ Problem make_problem(const Config& config) {
   problem.output.fields = config.boolean("output.fields");
   problem.output.field_interval = config.number("output.field_interval");
 
+  check_resources(config, problem);
   problem.resolved_config = config.to_yaml();
   return problem;
 }

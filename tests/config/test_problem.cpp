@@ -116,6 +116,27 @@ TEST(Problem, PaperCaseGivesDocumentedValuesInSi) {
   EXPECT_TRUE(p.output.fields);
 }
 
+// Resource guards before anything is allocated. Cells: the weld zone's r–z area
+// R (h_stack + 2 d) = 4.5 mm × 4 mm over the square of its edge 0.01 mm / 2⁴,
+// 18 / (6.25e-4)² = 4.608e7, plus the rest of the sheets' (15 mm × 2 mm) and the
+// caps' (2 × 7.9 mm × 20 mm) rectangles, 328 mm², over (0.01 mm)²: 3.28e6, in all
+// 4.94e7, far above the default limit of 1e5; the message names the limit's key and
+// the memory. Steps: output every 1e-6 ms over the 160 ms weld stage
+// adds 1.6e8 to the 80 + 140 steps of the step sizes; the output interval is blamed.
+TEST(Problem, CaseBeyondTheCellOrStepLimitIsRefusedNamingTheLimitKey) {
+  const std::string cells = error_of([] {
+    load_problem(paper_case, {"mesh.base_size=0.01 mm", "mesh.weld_zone.levels=4"});
+  });
+  EXPECT_HAS(cells, "about 4.94e+07 cells");
+  EXPECT_HAS(cells, "solver.max_cells = 100000");
+  EXPECT_HAS(cells, "GB of memory");
+  EXPECT_NO_THROW(load_problem(paper_case, {"mesh.base_size=0.01 mm", "mesh.weld_zone.levels=4", "solver.max_cells=100000000"}));
+  const std::string steps = error_of([] { load_problem(paper_case, {"output.interval=1e-6 ms"}); });
+  EXPECT_EQ(steps.rfind("--set: output.interval", 0), 0u) << steps;
+  EXPECT_HAS(steps, "up to 1.6e+08 time steps");
+  EXPECT_HAS(steps, "solver.max_steps = 100000");
+}
+
 TEST(Problem, PaperCaseSpellsOutTheSchemaDefaults) {
   const std::string path = write_case("case: {name: paper_case}\n");
   EXPECT_EQ(load_problem(paper_case).resolved_config, load_problem(path).resolved_config);
