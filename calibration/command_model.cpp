@@ -296,9 +296,15 @@ EvaluationResult CommandModel::evaluate(const Eigen::VectorXd& theta) const {
     if (!folder.empty()) fs::remove_all(folder, ignored);
   };
   try {
-    std::string pattern = (run_folder_parent_ / "rsw-command-XXXXXX").string();
+    fs::path parent = run_folder_parent_;
+    if (parent.empty()) {
+      std::error_code error;
+      parent = fs::temp_directory_path(error);
+      if (error) parent = "/tmp";
+    }
+    std::string pattern = (parent / "rsw-command-XXXXXX").string();
     if (::mkdtemp(pattern.data()) == nullptr) {
-      return EvaluationResult::failure("cannot create a run folder in " + run_folder_parent_.string() + " (" +
+      return EvaluationResult::failure("cannot create a run folder in " + parent.string() + " (" +
                                        std::strerror(errno) + ")");
     }
     folder = pattern;

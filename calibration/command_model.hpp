@@ -46,7 +46,9 @@ std::vector<std::string> split_command_line(const std::string& text);
 class CommandModel : public ForwardModel {
  public:
   // `arguments[0]` is the program (absolute path of an executable file); the rest are
-  // passed to it unchanged. Run folders are made in `run_folder_parent`. Throws
+  // passed to it unchanged. Run folders are made in `run_folder_parent` (empty: the
+  // temporary directory at run time, which a farm's workers have in the farm's own
+  // folder, removed with it). Throws
   // std::invalid_argument for an empty argument list or a relative program path.
   CommandModel(std::vector<std::string> arguments, std::vector<std::string> parameter_names,
                std::vector<std::string> feature_names, std::filesystem::path run_folder_parent);

@@ -21,6 +21,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <iostream>
 #include <string>
 #include <thread>
@@ -123,15 +124,19 @@ class LocalWorkers {
   LocalWorkers(const ForwardModel& model, const StudyDesign& design, std::size_t n_workers,
              double run_timeout, int rank, fs::path results_file)
       : model_(model), design_(design), run_timeout_(run_timeout), rank_(rank),
-        results_file_(std::move(results_file)), workers_(n_workers) {
+        results_file_(std::move(results_file)), scratch_(make_scratch_folder()), workers_(n_workers) {
     try {
       for (auto& worker : workers_) spawn(worker);
     } catch (...) {
       shutdown(true);
+      remove_scratch();
       throw;
     }
   }
-  ~LocalWorkers() { shutdown(true); }
+  ~LocalWorkers() {
+    shutdown(true);
+    remove_scratch();
+  }
   LocalWorkers(const LocalWorkers&) = delete;
   LocalWorkers& operator=(const LocalWorkers&) = delete;
 
@@ -232,6 +237,25 @@ class LocalWorkers {
     std::vector<char> buffer;
   };
 
+  // The workers' temporary directory (TMPDIR in each worker): the run folders of a
+  // worker killed mid-run (time limit, crash) are removed with it when the pool ends.
+  static fs::path make_scratch_folder() {
+    std::error_code error;
+    fs::path parent = fs::temp_directory_path(error);
+    if (error) parent = "/tmp";
+    std::string pattern = (parent / "rsw-farm-XXXXXX").string();
+    if (::mkdtemp(pattern.data()) == nullptr) {
+      throw FarmError("evaluation farm: cannot create a temporary folder in " + parent.string() + ": " +
+                      std::strerror(errno));
+    }
+    return pattern;
+  }
+  void remove_scratch() {
+    std::error_code ignored;
+    if (!scratch_.empty()) fs::remove_all(scratch_, ignored);
+    scratch_.clear();
+  }
+
   void spawn(Worker& worker) {
     int pair[2];
     if (::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, pair) != 0) {
@@ -255,6 +279,7 @@ class LocalWorkers {
       // Nor the results file: HDF5 locks it, and an inherited descriptor would keep the
       // lock alive after the farm itself was killed.
       close_descriptors_of(results_file_);
+      ::setenv("TMPDIR", scratch_.c_str(), 1);
       worker_main(pair[1], parent, model_, design_.feature_names.size(), design_.feature_names);
     }
     ::close(pair[1]);
@@ -312,6 +337,7 @@ class LocalWorkers {
   double run_timeout_;
   int rank_;
   fs::path results_file_;  // empty on MPI ranks that do not write
+  fs::path scratch_;       // the workers' TMPDIR
   std::vector<Worker> workers_;
 };
 

@@ -388,11 +388,8 @@ std::unique_ptr<cal::ForwardModel> make_forward_model(const cal::Study& study, c
     }
     arguments[0] = found;
   }
-  std::error_code error;
-  fs::path temporary = fs::temp_directory_path(error);
-  if (error) temporary = "/tmp";
   return std::make_unique<cal::CommandModel>(std::move(arguments), study.parameter_space().names(),
-                                             study.feature_names(), temporary);
+                                             study.feature_names(), fs::path{});  // TMPDIR at run time
 }
 
 fem::OutputFolder claim_study_folder(const cal::Study& study, const std::string& kind, bool overwrite,

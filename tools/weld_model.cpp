@@ -55,9 +55,11 @@ calibration::EvaluationResult WeldForwardModel::evaluate(const Eigen::VectorXd& 
   try {
     physics::Problem problem = physics::make_problem(config_at(theta));
     problem.output.fields = false;
-    char tmpl[] = "/tmp/rsw-run-XXXXXX";
-    if (!mkdtemp(tmpl)) return calibration::EvaluationResult::failure("cannot create a temporary folder");
-    dir = tmpl;
+    std::error_code error;
+    const fs::path parent = fs::temp_directory_path(error);  // a farm's workers: the farm's folder
+    std::string pattern = ((error ? fs::path("/tmp") : parent) / "rsw-run-XXXXXX").string();
+    if (!mkdtemp(pattern.data())) return calibration::EvaluationResult::failure("cannot create a temporary folder");
+    dir = pattern;
     const auto run = physics::run_weld(problem, dir / "run");
     if (!run.success) {
       fs::remove_all(dir);

@@ -127,7 +127,11 @@ TEST(CommandModelCli, FailedCommandsAreRecordedWithTheirReasonsAndTheStudyGoesOn
                                      "/usr/bin/python3 linear_model.py --fail-above 0.8 --silent-below 0.2 "
                                      "--undefined-above 0.6 --sleep-above 0.7 --pid-file " + pids.string(),
                                      20);
-  const CommandResult r = run_rsw("study run " + study.string() + " --workers 2 --timeout 2 -q");
+  // A temporary directory of its own: what the runs leave there is checked at the end.
+  const fs::path tmp = dir / "tmp";
+  fs::create_directories(tmp);
+  const CommandResult r = run_command("TMPDIR=" + tmp.string() + " " + std::string(RSW_BINARY) + " study run " +
+                                      study.string() + " --workers 2 --timeout 2 -q");
   ASSERT_EQ(r.status, 0) << r.output;
   const auto runs = runs_of(dir, "misbehaving");
   ASSERT_EQ(runs.size(), 20u);
@@ -186,6 +190,9 @@ TEST(CommandModelCli, FailedCommandsAreRecordedWithTheirReasonsAndTheStudyGoesOn
     EXPECT_TRUE(gone) << "command process " << pid << " outlived the study";
   }
   EXPECT_EQ(n_commands, 20);
+  // No run folder is left behind, not even those of the workers killed at the time limit
+  // (the farm's workers keep them in its own folder and it removes that at the end).
+  for (const auto& entry : fs::directory_iterator(tmp)) ADD_FAILURE() << "left behind: " << entry.path();
   fs::remove_all(dir);
 }
 
