@@ -2,7 +2,7 @@
 # The "measured" data of the twin experiments (README.md): one weld simulated by rsw at
 # known parameters — P1 = contact.electrode_sheet.htc_p1 = 0.02, every other value as in
 # validation/paper_case/weld.yaml — on the coarse mesh of tools/run_default.sh, with
-# signals at every 1 ms step and no field files (the settings of the studies' model.set),
+# signals at every step and no field files (the settings of the studies' model.set),
 # then Gaussian noise added with a fixed seed by add_noise.py (its docstring lists the
 # noise). Writes validation/twin/data/: truth/ (the run), noise_free.csv,
 # measured_1.csv ... measured_5.csv, twin_features.csv, twin_truth.json.
