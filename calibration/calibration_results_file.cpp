@@ -88,7 +88,8 @@ const std::vector<std::string> emulator_diagnostics_columns = {
 Eigen::MatrixXd emulator_diagnostics_table(const CalibrationResult& result) {
   const auto p = static_cast<Eigen::Index>(result.feature_names.size());
   const auto n_fixed = static_cast<Eigen::Index>(emulator_diagnostics_columns.size());
-  Eigen::MatrixXd table(static_cast<Eigen::Index>(result.emulator_history.size()), n_fixed + p);
+  const auto d = static_cast<Eigen::Index>(result.parameter_names.size());
+  Eigen::MatrixXd table(static_cast<Eigen::Index>(result.emulator_history.size()), n_fixed + p + d);
   for (std::size_t k = 0; k < result.emulator_history.size(); ++k) {
     const EmulatorIteration& it = result.emulator_history[k];
     const auto r = static_cast<Eigen::Index>(k);
@@ -96,7 +97,10 @@ Eigen::MatrixXd emulator_diagnostics_table(const CalibrationResult& result) {
         it.evidence_relative_error, it.smc_log_evidence, it.n_temperatures, it.pool_ess, it.emulator_influence,
         it.plug_in_ess, it.quantile_shift, it.influence_settled ? 1.0 : 0.0, it.quantiles_settled ? 1.0 : 0.0,
         it.counted ? 1.0 : 0.0, it.max_variance_ratio, static_cast<double>(it.chosen_points.rows()), it.seconds;
-    table.row(r).tail(p) = it.variance_ratios.transpose();
+    table.row(r).segment(n_fixed, p) = it.variance_ratios.transpose();
+    table.row(r).tail(d) = it.parameter_influence.size() == d
+                               ? Eigen::RowVectorXd(it.parameter_influence.transpose())
+                               : Eigen::RowVectorXd::Constant(d, std::numeric_limits<double>::quiet_NaN());
   }
   return table;
 }
@@ -136,6 +140,7 @@ std::vector<std::string> diagnostics_header(const CalibrationResult& result) {
   if (result.method == CalibrationMethod::emulator) {
     std::vector<std::string> header = emulator_diagnostics_columns;
     for (const auto& name : result.feature_names) header.push_back("variance_ratio:" + name);
+    for (const auto& name : result.parameter_names) header.push_back("influence:" + name);
     return header;
   }
   std::vector<std::string> header = diagnostics_columns;

@@ -243,14 +243,14 @@ EmulatorCalibrationResult EmulatorCalibration::run() const {
       Eigen::VectorXd plug_weights = (plug_log.array() - plug_log.maxCoeff()).exp().matrix();
       plug_weights /= plug_weights.sum();
       it.plug_in_ess = 1.0 / plug_weights.squaredNorm();
-      double influence = 0.0;
+      it.parameter_influence.resize(d);
       for (int i = 0; i < d; ++i) {
         const Eigen::VectorXd values = pool.points.col(i);
         const Eigen::VectorXd plug_quantiles = weighted_quantiles(values, plug_weights, probabilities);
         const double sd = std::max(it.posterior_sd(i), 1e-12);
-        influence = std::max(influence, (plug_quantiles - it.quantiles.row(i).transpose()).cwiseAbs().maxCoeff() / sd);
+        it.parameter_influence(i) = (plug_quantiles - it.quantiles.row(i).transpose()).cwiseAbs().maxCoeff() / sd;
       }
-      it.emulator_influence = influence;
+      it.emulator_influence = it.parameter_influence.maxCoeff();
     }
     const FeaturePrediction at_particles = current.predict(sampled.particles);
     const Eigen::VectorXd irreducible = emulated.mean_variances() + at_particles.noise_variance;

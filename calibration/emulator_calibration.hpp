@@ -115,6 +115,7 @@ struct EmulatorIteration {
   Eigen::VectorXd posterior_sd;         // of each u_i
   double quantile_shift = 0.0;          // NaN on the first iteration
   double emulator_influence = 0.0;      // largest quantile difference plug-in vs pool, posterior sd
+  Eigen::VectorXd parameter_influence;  // the same per parameter (its largest of the three quantiles)
   double plug_in_ess = 0.0;             // effective sample size of the plug-in weights
   bool influence_settled = false;
   bool quantiles_settled = false;

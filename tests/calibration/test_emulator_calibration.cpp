@@ -118,6 +118,10 @@ TEST(EmulatorCalibration, RecoversTheClosedFormPosteriorAndEvidenceOfALinearMode
   for (const auto& warning : result.warnings) std::printf("  warning: %s\n", warning.c_str());
   EXPECT_TRUE(result.converged);
   EXPECT_NEAR(result.log_evidence, problem.log_evidence, std::log(1.05));
+  for (const auto& it : result.history) {  // the influence is its largest per-parameter part
+    ASSERT_EQ(it.parameter_influence.size(), problem.d);
+    EXPECT_EQ(it.parameter_influence.maxCoeff(), it.emulator_influence);
+  }
   Eigen::VectorXd weights = (result.pool_log_likelihood + result.pool_log_weight).array().exp().matrix();
   weights /= weights.sum();
   const Eigen::VectorXd mean = result.pool.transpose() * weights;
