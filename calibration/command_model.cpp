@@ -1,6 +1,7 @@
 // CommandModel: parameters.json → an external program (fork, execv) → features.json;
 // see command_model.hpp.
 #include "calibration/command_model.hpp"
+#include "fem/temporary_folder.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -296,18 +297,16 @@ EvaluationResult CommandModel::evaluate(const Eigen::VectorXd& theta) const {
     if (!folder.empty()) fs::remove_all(folder, ignored);
   };
   try {
-    fs::path parent = run_folder_parent_;
-    if (parent.empty()) {
-      std::error_code error;
-      parent = fs::temp_directory_path(error);
-      if (error) parent = "/tmp";
+    if (run_folder_parent_.empty()) {
+      folder = fem::make_temporary_folder("rsw-command-");
+    } else {
+      std::string pattern = (run_folder_parent_ / "rsw-command-XXXXXX").string();
+      if (::mkdtemp(pattern.data()) == nullptr) {
+        return EvaluationResult::failure("cannot create a run folder in " + run_folder_parent_.string() + " (" +
+                                         std::strerror(errno) + ")");
+      }
+      folder = pattern;
     }
-    std::string pattern = (parent / "rsw-command-XXXXXX").string();
-    if (::mkdtemp(pattern.data()) == nullptr) {
-      return EvaluationResult::failure("cannot create a run folder in " + parent.string() + " (" +
-                                       std::strerror(errno) + ")");
-    }
-    folder = pattern;
     Json parameters = Json::object();
     for (std::size_t i = 0; i < parameter_names_.size(); ++i) parameters[parameter_names_[i]] = theta[static_cast<Eigen::Index>(i)];
     {

@@ -3,6 +3,7 @@
 
 #include "calibration/farm_detail.hpp"
 #include "calibration/farm_protocol.hpp"
+#include "fem/temporary_folder.hpp"
 #include "fem/threads.hpp"
 
 #include <poll.h>
@@ -240,15 +241,11 @@ class LocalWorkers {
   // The workers' temporary directory (TMPDIR in each worker): the run folders of a
   // worker killed mid-run (time limit, crash) are removed with it when the pool ends.
   static fs::path make_scratch_folder() {
-    std::error_code error;
-    fs::path parent = fs::temp_directory_path(error);
-    if (error) parent = "/tmp";
-    std::string pattern = (parent / "rsw-farm-XXXXXX").string();
-    if (::mkdtemp(pattern.data()) == nullptr) {
-      throw FarmError("evaluation farm: cannot create a temporary folder in " + parent.string() + ": " +
-                      std::strerror(errno));
+    try {
+      return fem::make_temporary_folder("rsw-farm-");
+    } catch (const std::runtime_error& e) {
+      throw FarmError(std::string("evaluation farm: ") + e.what());
     }
-    return pattern;
   }
   void remove_scratch() {
     std::error_code ignored;

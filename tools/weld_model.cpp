@@ -4,6 +4,7 @@
 #include "calibration/features.hpp"
 #include "calibration/signal.hpp"
 #include "fem/config.hpp"
+#include "fem/temporary_folder.hpp"
 #include "fem/units.hpp"
 #include "physics/problem.hpp"
 #include "physics/weld_simulation.hpp"
@@ -55,11 +56,7 @@ calibration::EvaluationResult WeldForwardModel::evaluate(const Eigen::VectorXd& 
   try {
     physics::Problem problem = physics::make_problem(config_at(theta));
     problem.output.fields = false;
-    std::error_code error;
-    const fs::path parent = fs::temp_directory_path(error);  // a farm's workers: the farm's folder
-    std::string pattern = ((error ? fs::path("/tmp") : parent) / "rsw-run-XXXXXX").string();
-    if (!mkdtemp(pattern.data())) return calibration::EvaluationResult::failure("cannot create a temporary folder");
-    dir = pattern;
+    dir = fem::make_temporary_folder("rsw-run-");  // a farm's workers: inside the farm's folder
     const auto run = physics::run_weld(problem, dir / "run");
     if (!run.success) {
       fs::remove_all(dir);
