@@ -566,8 +566,10 @@ PosteriorResult Calibration::run_emulator(const RunBatch& evaluate_runs,
     std::ostream& out = *options_.progress;
     emulator_options.on_iteration = [&out, this](const EmulatorIteration& it) {
       const std::streamsize precision = out.precision(3);
-      out << "calibration " << design_.name << ": emulators of " << it.n_points << " runs: ln Z " << it.log_evidence
-          << ", influence " << it.emulator_influence << " sd" << (it.influence_settled ? " (settled)" : "")
+      out << "calibration " << design_.name << ": emulators of " << it.n_points << " runs";
+      if (it.n_focused > 0) out << " (" << it.n_focused << " plausible)";
+      out << ": ln Z " << it.log_evidence
+          << ", influence " << it.emulator_influence << " ± " << it.influence_standard_error << " sd" << (it.influence_settled ? " (settled)" : "")
           << ", variance ratio " << it.max_variance_ratio
           << ", quantile shift " << it.quantile_shift << " sd" << (it.quantiles_settled ? " (settled)" : "")
           << ", pool ESS " << static_cast<long>(it.pool_ess) << " (" << it.seconds << " s)\n"

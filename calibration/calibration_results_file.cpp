@@ -82,8 +82,8 @@ void write_posterior_csv(const fs::path& path, const CalibrationResult& result) 
 // Columns of the emulator route's diagnostics table, then one variance ratio per feature.
 const std::vector<std::string> emulator_diagnostics_columns = {
     "iteration", "n_points", "n_evaluations", "log_evidence", "evidence_relative_error", "smc_log_evidence",
-    "n_temperatures", "pool_ess", "emulator_influence", "plug_in_ess", "quantile_shift", "influence_settled",
-    "quantiles_settled", "counted", "max_variance_ratio", "n_chosen", "seconds"};
+    "n_temperatures", "pool_ess", "emulator_influence", "influence_standard_error", "plug_in_ess", "quantile_shift", "influence_settled",
+    "quantiles_settled", "counted", "max_variance_ratio", "n_focused", "focused_weight", "n_chosen", "seconds"};
 
 Eigen::MatrixXd emulator_diagnostics_table(const CalibrationResult& result) {
   const auto p = static_cast<Eigen::Index>(result.feature_names.size());
@@ -95,8 +95,9 @@ Eigen::MatrixXd emulator_diagnostics_table(const CalibrationResult& result) {
     const auto r = static_cast<Eigen::Index>(k);
     table.row(r).head(n_fixed) << static_cast<double>(k), it.n_points, it.n_evaluations, it.log_evidence,
         it.evidence_relative_error, it.smc_log_evidence, it.n_temperatures, it.pool_ess, it.emulator_influence,
-        it.plug_in_ess, it.quantile_shift, it.influence_settled ? 1.0 : 0.0, it.quantiles_settled ? 1.0 : 0.0,
-        it.counted ? 1.0 : 0.0, it.max_variance_ratio, static_cast<double>(it.chosen_points.rows()), it.seconds;
+        it.influence_standard_error, it.plug_in_ess, it.quantile_shift, it.influence_settled ? 1.0 : 0.0, it.quantiles_settled ? 1.0 : 0.0,
+        it.counted ? 1.0 : 0.0, it.max_variance_ratio, static_cast<double>(it.n_focused), it.focused_weight,
+        static_cast<double>(it.chosen_points.rows()), it.seconds;
     table.row(r).segment(n_fixed, p) = it.variance_ratios.transpose();
     table.row(r).tail(d) = it.parameter_influence.size() == d
                                ? Eigen::RowVectorXd(it.parameter_influence.transpose())

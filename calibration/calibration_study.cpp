@@ -279,6 +279,18 @@ void declare_calibration_keys(fem::ConfigSchema& s) {
   s.number("calibration.emulator.noise_pair_distance", "1", "1").default_value(shortest(emulator.noise_pair_distance))
       .range(Range{0.0, 0.5, false, false})
       .doc("Their distance in the unit cube.");
+  s.boolean("calibration.emulator.focus").default_value(emulator.focus ? "true" : "false")
+      .doc("Second emulators of the plausible runs (docs/CALIBRATION.md, 'Two routes').");
+  s.number("calibration.emulator.focus_cutoff", "1", "1").default_value(shortest(emulator.focus_cutoff))
+      .range(Range::open_closed(0, 1000))
+      .doc("Plausible point: every feature emulated within this many sd of the data.");
+  s.number("calibration.emulator.focus_training_cutoff", "1", "1")
+      .default_value(shortest(emulator.focus_training_cutoff))
+      .range(Range::open_closed(0, 1000))
+      .doc("Plausible run: every feature within this many standard errors; >= focus_cutoff.");
+  s.integer("calibration.emulator.focus_min_runs").default_value(std::to_string(emulator.focus_min_runs))
+      .range(Range::closed(0, 1000000))
+      .doc("Plausible runs needed; 0: 2d + 3.");
 
   s.section("calibration.posterior", "Sampling-importance-resampling of the prior pool (Smith & Gelfand 1992).");
   s.integer("calibration.posterior.n_samples").default_value("4000").range(Range::closed(10, 10000000))
@@ -402,6 +414,14 @@ CalibrationSettings read_calibration_settings(const Study& study) {
   emulator.noise_pairs = c.integer("calibration.emulator.noise_pairs");
   emulator.noise_pair_distance = c.number("calibration.emulator.noise_pair_distance");
   emulator.gp.trend = trend_of(c.text("calibration.emulator.trend"));
+  emulator.focus = c.boolean("calibration.emulator.focus");
+  emulator.focus_cutoff = c.number("calibration.emulator.focus_cutoff");
+  emulator.focus_training_cutoff = c.number("calibration.emulator.focus_training_cutoff");
+  emulator.focus_min_runs = c.integer("calibration.emulator.focus_min_runs");
+  if (emulator.focus_training_cutoff < emulator.focus_cutoff)
+    c.fail("calibration.emulator.focus_training_cutoff",
+           shortest(emulator.focus_training_cutoff) + " is below calibration.emulator.focus_cutoff (" +
+               shortest(emulator.focus_cutoff) + "); allowed: at least focus_cutoff");
   if (settings.method == CalibrationMethod::emulator) {
     const int n_initial = initial_points(settings, study.parameter_space().n_parameters());
     if (n_initial >= emulator.max_evaluations) {

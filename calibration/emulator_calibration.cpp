@@ -95,6 +95,41 @@ Eigen::MatrixXd choose_batch(FeatureEmulator emulator, const Eigen::MatrixXd& ca
   return chosen;
 }
 
+// The Monte Carlo standard error of the emulators' influence (the largest quantile
+// difference, in posterior sd, between two weightings of one pool): its spread over
+// bootstrap resamples of the pool (Efron & Tibshirani 1993), 30 of them.
+double influence_standard_error(const Eigen::MatrixXd& points, const Eigen::VectorXd& weights,
+                                const Eigen::VectorXd& plug_weights, const Eigen::VectorXd& posterior_sd,
+                                const std::vector<double>& probabilities, std::uint64_t seed) {
+  constexpr int n_resamples = 30;
+  const Eigen::Index n = points.rows();
+  std::mt19937_64 generator(seed);
+  std::uniform_int_distribution<Eigen::Index> pick(0, n - 1);
+  Eigen::VectorXd influence(n_resamples);
+  Eigen::VectorXd w(n), v(n), values(n);
+  for (int b = 0; b < n_resamples; ++b) {
+    std::vector<Eigen::Index> rows(static_cast<std::size_t>(n));
+    for (auto& r : rows) r = pick(generator);
+    for (Eigen::Index k = 0; k < n; ++k) {
+      w(k) = weights(rows[static_cast<std::size_t>(k)]);
+      v(k) = plug_weights(rows[static_cast<std::size_t>(k)]);
+    }
+    if (!(w.sum() > 0.0) || !(v.sum() > 0.0)) return not_a_number;
+    w /= w.sum();
+    v /= v.sum();
+    double largest = 0.0;
+    for (Eigen::Index i = 0; i < points.cols(); ++i) {
+      for (Eigen::Index k = 0; k < n; ++k) values(k) = points(rows[static_cast<std::size_t>(k)], i);
+      const Eigen::VectorXd difference =
+          weighted_quantiles(values, v, probabilities) - weighted_quantiles(values, w, probabilities);
+      largest = std::max(largest, difference.cwiseAbs().maxCoeff() / std::max(posterior_sd(i), 1e-12));
+    }
+    influence(b) = largest;
+  }
+  const double mean = influence.mean();
+  return std::sqrt((influence.array() - mean).square().sum() / (n_resamples - 1));
+}
+
 // Near-duplicates of the `count` successful runs with the highest emulated
 // log-likelihood: each `distance` away in a uniformly random direction, reflected
 // into the unit cube.
@@ -148,6 +183,10 @@ EmulatorCalibration::EmulatorCalibration(int dimension, BatchFeatureFunction eva
     throw std::invalid_argument("EmulatorCalibration: tolerances must be positive");
   if (options_.noise_pairs < 0 || !(options_.noise_pair_distance > 0.0 && options_.noise_pair_distance < 0.5))
     throw std::invalid_argument("EmulatorCalibration: noise_pairs must be >= 0 and noise_pair_distance in (0, 0.5)");
+  if (options_.focus && (!(options_.focus_cutoff > 0.0) || !(options_.focus_training_cutoff >= options_.focus_cutoff) ||
+                         options_.focus_min_runs < 0))
+    throw std::invalid_argument(
+        "EmulatorCalibration: a focus needs 0 < focus_cutoff <= focus_training_cutoff and focus_min_runs >= 0");
   if (options_.initial_design && options_.initial_design->cols() != dimension_)
     throw std::invalid_argument("EmulatorCalibration: the initial design has " +
                                 std::to_string(options_.initial_design->cols()) + " columns, the problem " +
@@ -189,6 +228,15 @@ EmulatorCalibrationResult EmulatorCalibration::run() const {
     warping.centre = likelihood_.observations().colwise().mean().transpose();
     warping.width = options_.warping_width * emulated.mean_variances().cwiseSqrt();
   }
+  std::optional<FeatureFocus> focus;
+  if (options_.focus) {
+    focus = FeatureFocus{};
+    focus->observed_mean = likelihood_.observations().colwise().mean().transpose();
+    focus->mean_variances = emulated.mean_variances();
+    focus->cutoff = options_.focus_cutoff;
+    focus->training_cutoff = options_.focus_training_cutoff;
+    focus->min_runs = options_.focus_min_runs > 0 ? options_.focus_min_runs : 2 * d + 3;
+  }
   std::optional<FeatureEmulator> emulator;
   NoisePairs noise_pairs;
   int consecutive = 0, previous_points = 0;
@@ -203,8 +251,9 @@ EmulatorCalibrationResult EmulatorCalibration::run() const {
     gp.seed = options_.seed * 7919 + static_cast<std::uint64_t>(iteration) * 104729;
     it.n_noise_pairs = static_cast<int>(noise_pairs.size());
     emulator = FeatureEmulator(runs.point_matrix(), runs.feature_matrix(), gp, emulator ? &*emulator : nullptr, warping,
-                               noise_pairs);
+                               noise_pairs, focus);
     const FeatureEmulator& current = *emulator;
+    it.n_focused = current.focused() != nullptr ? static_cast<int>(current.focused_rows().size()) : 0;
     const BatchLogDensity log_likelihood = [&](const Eigen::MatrixXd& points) {
       return emulated.log_likelihood(current.predict(points));
     };
@@ -251,12 +300,21 @@ EmulatorCalibrationResult EmulatorCalibration::run() const {
         it.parameter_influence(i) = (plug_quantiles - it.quantiles.row(i).transpose()).cwiseAbs().maxCoeff() / sd;
       }
       it.emulator_influence = it.parameter_influence.maxCoeff();
+      it.influence_standard_error =
+          influence_standard_error(pool.points, weights, plug_weights, it.posterior_sd, probabilities,
+                                   options_.seed * 43 + static_cast<std::uint64_t>(iteration));
+    }
+    if (current.focused() != nullptr) {
+      const Eigen::VectorXd implausible = current.implausibility(pool.points);
+      for (Eigen::Index r = 0; r < implausible.size(); ++r)
+        if (implausible(r) <= options_.focus_cutoff) it.focused_weight += weights(r);
     }
     const FeaturePrediction at_particles = current.predict(sampled.particles);
-    const Eigen::VectorXd irreducible = emulated.mean_variances() + at_particles.noise_variance;
+    const Eigen::VectorXd noise_at_particles = at_particles.noise_variance.colwise().mean().transpose();
+    const Eigen::VectorXd irreducible = emulated.mean_variances() + noise_at_particles;
     it.variance_ratios = at_particles.latent_variance.colwise().mean().transpose().cwiseQuotient(irreducible);
     it.max_variance_ratio = it.variance_ratios.maxCoeff();
-    it.noise_standard_deviations = at_particles.noise_variance.cwiseSqrt();
+    it.noise_standard_deviations = noise_at_particles.cwiseSqrt();
     it.quantile_shift = not_a_number;
     if (!result.history.empty()) {
       const EmulatorIteration& before = result.history.back();

@@ -90,6 +90,15 @@ struct EmulatorCalibrationOptions {
   // (feature_emulator.hpp, NoisePairs). 0: none.
   int noise_pairs = 0;
   double noise_pair_distance = 0.005;  // in the unit cube
+  // Focusing (feature_emulator.hpp): a second set of emulators learns the plausible runs
+  // (all features within focus_training_cutoff data standard errors) and predicts where
+  // the emulators of all runs find a point plausible (within focus_cutoff), once
+  // focus_min_runs runs are plausible (0: 2 d + 3, the diagonal quadratic trend's
+  // 2 d + 1 terms and two more). false: the emulators of all runs only.
+  bool focus = false;
+  double focus_cutoff = 3.0;
+  double focus_training_cutoff = 9.0;
+  int focus_min_runs = 0;
   std::uint64_t seed = 1;
   std::optional<Eigen::MatrixXd> initial_design;  // rows in [0,1]^d, replaces the Latin hypercube
   std::function<void(const EmulatorIteration&)> on_iteration;  // progress, after each iteration's checks
@@ -103,6 +112,8 @@ struct EmulatorIteration {
   int n_failed = 0;          // failed runs so far
   int n_evaluations = 0;     // all runs so far
   int n_noise_pairs = 0;     // noise pairs that bound the nuggets
+  int n_focused = 0;         // plausible runs in the focused emulators (0: none fitted)
+  double focused_weight = 0.0;  // posterior weight of the pool where the focused emulators predict
   double log_evidence = 0.0;            // ln Z̃ (importance sampling)
   double evidence_relative_error = 0.0; // SE(Z̃)/Z̃
   double smc_log_evidence = 0.0;        // ln Z̃ of the tempered SMC, a check
@@ -116,6 +127,7 @@ struct EmulatorIteration {
   double quantile_shift = 0.0;          // NaN on the first iteration
   double emulator_influence = 0.0;      // largest quantile difference plug-in vs pool, posterior sd
   Eigen::VectorXd parameter_influence;  // the same per parameter (its largest of the three quantiles)
+  double influence_standard_error = 0.0;  // of emulator_influence, by resampling the pool (Monte Carlo error)
   double plug_in_ess = 0.0;             // effective sample size of the plug-in weights
   bool influence_settled = false;
   bool quantiles_settled = false;

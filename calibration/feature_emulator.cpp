@@ -12,7 +12,8 @@ namespace rsw::calibration {
 
 FeatureEmulator::FeatureEmulator(const Eigen::MatrixXd& inputs, const Eigen::MatrixXd& features,
                                  const GaussianProcessOptions& options, const FeatureEmulator* previous,
-                                 FeatureWarping warping, const NoisePairs& pairs)
+                                 FeatureWarping warping, const NoisePairs& pairs,
+                                 const std::optional<FeatureFocus>& focus)
     : warping_(std::move(warping)) {
   if (inputs.rows() != features.rows())
     throw std::invalid_argument("FeatureEmulator: " + std::to_string(inputs.rows()) + " points but " +
@@ -61,21 +62,95 @@ FeatureEmulator::FeatureEmulator(const Eigen::MatrixXd& inputs, const Eigen::Mat
     }
     processes_.push_back(regression.run());
   }
+  if (!focus) return;
+  if (focus->observed_mean.size() != p || focus->mean_variances.size() != p ||
+      !(focus->mean_variances.array() > 0.0).all())
+    throw std::invalid_argument("FeatureEmulator: a focus needs an observed mean and a positive variance per feature");
+  if (!(focus->cutoff > 0.0) || !(focus->training_cutoff >= focus->cutoff))
+    throw std::invalid_argument("FeatureEmulator: a focus needs 0 < cutoff <= training_cutoff");
+  focus_ = focus;
+  // The plausible runs, by their own features against the data and the global nugget.
+  const Eigen::VectorXd allowed = (focus->mean_variances + global_noise_variances()).cwiseSqrt();
+  std::vector<Eigen::Index> rows;
+  for (Eigen::Index r = 0; r < features.rows(); ++r) {
+    const double implausible =
+        ((features.row(r).transpose() - focus->observed_mean).cwiseAbs().cwiseQuotient(allowed)).maxCoeff();
+    if (implausible <= focus->training_cutoff) rows.push_back(r);
+  }
+  const auto n_rows = static_cast<Eigen::Index>(rows.size());
+  if (n_rows < std::max(focus->min_runs, 2) || n_rows == inputs.rows()) return;
+  Eigen::MatrixXd focused_inputs(n_rows, inputs.cols()), focused_features(n_rows, p);
+  std::vector<Eigen::Index> new_row(static_cast<std::size_t>(inputs.rows()), -1);
+  for (Eigen::Index k = 0; k < n_rows; ++k) {
+    const Eigen::Index r = rows[static_cast<std::size_t>(k)];
+    focused_inputs.row(k) = inputs.row(r);
+    focused_features.row(k) = features.row(r);
+    new_row[static_cast<std::size_t>(r)] = k;
+  }
+  NoisePairs focused_pairs;
+  for (const auto& [a, b] : pairs) {
+    const Eigen::Index fa = new_row[static_cast<std::size_t>(a)], fb = new_row[static_cast<std::size_t>(b)];
+    if (fa >= 0 && fb >= 0) focused_pairs.emplace_back(fa, fb);
+  }
+  const FeatureEmulator* warm = previous != nullptr ? previous->focused() : nullptr;
+  focused_ = std::make_shared<const FeatureEmulator>(focused_inputs, focused_features, options, warm, warping_,
+                                                     focused_pairs);
+  focused_rows_ = std::move(rows);
+}
+
+Eigen::VectorXd FeatureEmulator::global_noise_variances() const {
+  const auto p = static_cast<Eigen::Index>(processes_.size());
+  const bool warped = warping_.centre.size() > 0;
+  Eigen::VectorXd noise(p);
+  for (Eigen::Index j = 0; j < p; ++j) {
+    const double at_data = warped ? warping_.width(j) : 1.0;  // dy/dz at z = 0
+    noise(j) = processes_[static_cast<std::size_t>(j)].hyperparameters().noise_variance * scales_(j) * scales_(j) *
+               at_data * at_data;
+  }
+  return noise;
+}
+
+Eigen::VectorXd FeatureEmulator::implausibility(const FeaturePrediction& global) const {
+  if (!focus_) return {};
+  const Eigen::ArrayXXd total = global.latent_variance.array() + global.noise_variance.array() +
+                                focus_->mean_variances.transpose().replicate(global.mean.rows(), 1).array();
+  const Eigen::ArrayXXd residual =
+      (focus_->observed_mean.transpose().replicate(global.mean.rows(), 1) - global.mean).array().abs();
+  return (residual / total.sqrt()).rowwise().maxCoeff().matrix();
+}
+
+Eigen::VectorXd FeatureEmulator::implausibility(const Eigen::MatrixXd& points) const {
+  return implausibility(predict_global(points));
 }
 
 FeaturePrediction FeatureEmulator::predict(const Eigen::MatrixXd& points) const {
+  FeaturePrediction prediction = predict_global(points);
+  if (!focused_) return prediction;
+  const Eigen::VectorXd implausible = implausibility(prediction);
+  std::vector<Eigen::Index> plausible;
+  for (Eigen::Index r = 0; r < points.rows(); ++r)
+    if (implausible(r) <= focus_->cutoff) plausible.push_back(r);
+  if (plausible.empty()) return prediction;
+  Eigen::MatrixXd inside(static_cast<Eigen::Index>(plausible.size()), points.cols());
+  for (std::size_t k = 0; k < plausible.size(); ++k) inside.row(static_cast<Eigen::Index>(k)) = points.row(plausible[k]);
+  const FeaturePrediction local = focused_->predict(inside);
+  for (std::size_t k = 0; k < plausible.size(); ++k) {
+    const auto row = static_cast<Eigen::Index>(k);
+    prediction.mean.row(plausible[k]) = local.mean.row(row);
+    prediction.latent_variance.row(plausible[k]) = local.latent_variance.row(row);
+    prediction.noise_variance.row(plausible[k]) = local.noise_variance.row(row);
+  }
+  return prediction;
+}
+
+FeaturePrediction FeatureEmulator::predict_global(const Eigen::MatrixXd& points) const {
   FeaturePrediction prediction;
   const auto p = static_cast<Eigen::Index>(processes_.size());
   const Eigen::Index m = points.rows();
   prediction.mean.resize(m, p);
   prediction.latent_variance.resize(m, p);
-  prediction.noise_variance.resize(p);
+  prediction.noise_variance = global_noise_variances().transpose().replicate(m, 1);
   const bool warped = warping_.centre.size() > 0;
-  for (Eigen::Index j = 0; j < p; ++j) {
-    const double at_data = warped ? warping_.width(j) : 1.0;  // dy/dz at z = 0
-    prediction.noise_variance(j) = processes_[static_cast<std::size_t>(j)].hyperparameters().noise_variance *
-                                   scales_(j) * scales_(j) * at_data * at_data;
-  }
   // Blocks of points on the process's threads; Eigen runs serially inside the region,
   // so each block is computed the same way whatever the thread count.
   constexpr Eigen::Index block = 128;
@@ -107,6 +182,9 @@ FeatureEmulator FeatureEmulator::with_believed_point(const Eigen::VectorXd& x) c
   believed.offsets_ = offsets_;
   believed.scales_ = scales_;
   believed.warping_ = warping_;
+  believed.focus_ = focus_;
+  believed.focused_rows_ = focused_rows_;
+  if (focused_) believed.focused_ = std::make_shared<const FeatureEmulator>(focused_->with_believed_point(x));
   for (const GaussianProcess& process : processes_) {
     believed.processes_.push_back(process.with_added_point(x, process.predict(x).mean(0)));
   }
@@ -134,7 +212,7 @@ Eigen::VectorXd EmulatedLikelihood::log_likelihood(const FeaturePrediction& pred
   Eigen::VectorXd values = Eigen::VectorXd::Constant(prediction.mean.rows(), constant_);
   for (Eigen::Index j = 0; j < observed_mean_.size(); ++j) {
     const Eigen::ArrayXd total =
-        prediction.latent_variance.col(j).array() + (mean_variances_(j) + prediction.noise_variance(j));
+        prediction.latent_variance.col(j).array() + prediction.noise_variance.col(j).array() + mean_variances_(j);
     const Eigen::ArrayXd residual = observed_mean_(j) - prediction.mean.col(j).array();
     values.array() -= 0.5 * residual.square() / total + 0.5 * (2.0 * M_PI * total).log();
   }

@@ -32,6 +32,20 @@
 // which is linear within a few w of the data and logarithmic beyond, and the prediction
 // goes back by the delta method: y = c + w sinh(m_z), s_y = w cosh(m_z) s_z, exact as
 // s_z → 0. The nugget is reported at the data (τ_y = w τ_z), where it matters.
+// Focusing (optional; history matching's refocusing, Vernon, Goldstein & Bower 2010,
+// "Galaxy formation: a Bayesian uncertainty analysis", §4; Andrianakis et al. 2015).
+// A feature that spans thousands of times the data's precision over the prior (the
+// weld's R_beta: 300–3600 µΩ against 3.5 µΩ) forces one GP over all runs to a large
+// signal variance and length scales set by the far corners; where the posterior lives
+// it stays uncertain. With a focus, a second emulator learns only the plausible runs,
+// those whose features all lie within training_cutoff data standard errors:
+//     I_r = max_j |y_rj − Ȳ_j| / √(V_j/N + τ_j²) ≤ training_cutoff   (τ_j of the global fit),
+// and at a point u the prediction is the focused one where the global emulator finds
+// u plausible,
+//     I(u) = max_j |Ȳ_j − m_j(u)| / √(V_j/N + s_j²(u) + τ_j²) ≤ cutoff   (3: Pukelsheim's
+// three-sigma rule, as Vernon et al.), the global one elsewhere. The training cutoff
+// is wider than the cutoff, so the focused emulator has runs beyond the border where it
+// is used. Fewer than min_runs plausible runs, or all of them: no focused emulator.
 // Units: u dimensionless; m_j, s_j, τ_j, Y, σ in the feature's SI unit.
 #pragma once
 
@@ -40,6 +54,8 @@
 
 #include <Eigen/Core>
 
+#include <memory>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -48,7 +64,7 @@ namespace rsw::calibration {
 struct FeaturePrediction {
   Eigen::MatrixXd mean;             // m × p, m_j at each point
   Eigen::MatrixXd latent_variance;  // m × p, s_j²
-  Eigen::VectorXd noise_variance;   // p, τ_j²
+  Eigen::MatrixXd noise_variance;   // m × p, τ_j² (the same in each row without a focus)
 };
 
 // Per feature j: centre c_j and width w_j > 0 of the warping above; empty: none.
@@ -66,13 +82,24 @@ struct FeatureWarping {
 // adds about δ² |∇y|²/(2d) to the bound, negligible for a small δ.
 using NoisePairs = std::vector<std::pair<Eigen::Index, Eigen::Index>>;
 
+// The focus above: the observed means Ȳ_j, their variances V_j/N, the two cutoffs and
+// the fewest plausible runs a focused emulator is fitted to.
+struct FeatureFocus {
+  Eigen::VectorXd observed_mean, mean_variances;
+  double cutoff = 3.0;
+  double training_cutoff = 9.0;
+  int min_runs = 30;
+};
+
 class FeatureEmulator {
  public:
   // inputs: n × d unit-cube points; features: n × p finite values. `previous` (same p),
   // if given, warm-starts each feature's hyperparameter search.
   // `pairs`, if any, give each feature's nugget floor (NoisePairs above).
+  // `focus`, if given, adds the focused emulator (Focusing above).
   FeatureEmulator(const Eigen::MatrixXd& inputs, const Eigen::MatrixXd& features, const GaussianProcessOptions& options,
-                  const FeatureEmulator* previous = nullptr, FeatureWarping warping = {}, const NoisePairs& pairs = {});
+                  const FeatureEmulator* previous = nullptr, FeatureWarping warping = {}, const NoisePairs& pairs = {},
+                  const std::optional<FeatureFocus>& focus = std::nullopt);
 
   FeaturePrediction predict(const Eigen::MatrixXd& points) const;
   // The same hyperparameters conditioned on one more point at each feature's own mean
@@ -84,12 +111,23 @@ class FeatureEmulator {
   const std::vector<GaussianProcess>& processes() const { return processes_; }
   const Eigen::VectorXd& offsets() const { return offsets_; }  // mean of the GP's outputs
   const Eigen::VectorXd& scales() const { return scales_; }    // their sd
+  // The focused emulator (null without one) and the rows of the inputs it learned.
+  const FeatureEmulator* focused() const { return focused_.get(); }
+  const std::vector<Eigen::Index>& focused_rows() const { return focused_rows_; }
+  // I(u) of the global emulator at each point (Focusing); empty without a focus.
+  Eigen::VectorXd implausibility(const Eigen::MatrixXd& points) const;
 
  private:
   FeatureEmulator() = default;
+  FeaturePrediction predict_global(const Eigen::MatrixXd& points) const;
+  Eigen::VectorXd global_noise_variances() const;  // τ_j² of the global fit, feature units
+  Eigen::VectorXd implausibility(const FeaturePrediction& global) const;
   std::vector<GaussianProcess> processes_;
   Eigen::VectorXd offsets_, scales_;  // of the GP's outputs (z if warped)
   FeatureWarping warping_;
+  std::optional<FeatureFocus> focus_;
+  std::shared_ptr<const FeatureEmulator> focused_;
+  std::vector<Eigen::Index> focused_rows_;
 };
 
 // ln L̃ above for the observations and noise of `likelihood`.

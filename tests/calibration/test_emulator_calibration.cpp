@@ -2,6 +2,7 @@
 //   - the emulated likelihood against the Gaussian likelihood and a hand value;
 //   - a linear-Gaussian model in six dimensions, whose posterior and evidence are
 //     derived in closed form below.
+#include "calibration/designs.hpp"
 #include "calibration/emulator_calibration.hpp"
 #include "calibration/feature_emulator.hpp"
 #include "calibration/likelihood.hpp"
@@ -26,7 +27,7 @@ TEST(EmulatedLikelihood, EqualsTheGaussianLikelihoodWhenTheEmulatorIsExact) {
   prediction.mean.resize(2, 2);
   prediction.mean << 1.05, 10.3, 0.7, 12.0;
   prediction.latent_variance = Eigen::MatrixXd::Zero(2, 2);
-  prediction.noise_variance = Eigen::VectorXd::Zero(2);
+  prediction.noise_variance = Eigen::MatrixXd::Zero(2, 2);
   const Eigen::VectorXd emulated = EmulatedLikelihood(likelihood).log_likelihood(prediction);
   for (int r = 0; r < 2; ++r) {
     EXPECT_NEAR(emulated(r), likelihood.log_likelihood(Eigen::VectorXd(prediction.mean.row(r).transpose())), 1e-10);
@@ -39,7 +40,7 @@ TEST(EmulatedLikelihood, EmulatorAndNoiseVariancesAddToTheVarianceOfTheObservedM
   const GaussianLikelihood likelihood({"a"}, Eigen::MatrixXd::Constant(1, 1, 2.0),
                                       ObservationNoise::given({{"a", 0.2}}));
   FeaturePrediction prediction{Eigen::MatrixXd::Constant(1, 1, 1.5), Eigen::MatrixXd::Constant(1, 1, 0.05),
-                               Eigen::VectorXd::Constant(1, 0.01)};
+                               Eigen::MatrixXd::Constant(1, 1, 0.01)};
   const double expected = -0.25 / 0.2 - 0.5 * std::log(2.0 * M_PI * 0.1);
   EXPECT_NEAR(EmulatedLikelihood(likelihood).log_likelihood(prediction)(0), expected, 1e-12);
 }
@@ -122,6 +123,108 @@ TEST(EmulatorCalibration, RecoversTheClosedFormPosteriorAndEvidenceOfALinearMode
     ASSERT_EQ(it.parameter_influence.size(), problem.d);
     EXPECT_EQ(it.parameter_influence.maxCoeff(), it.emulator_influence);
   }
+  Eigen::VectorXd weights = (result.pool_log_likelihood + result.pool_log_weight).array().exp().matrix();
+  weights /= weights.sum();
+  const Eigen::VectorXd mean = result.pool.transpose() * weights;
+  for (int j = 0; j < problem.d; ++j) {
+    const double variance = (result.pool.col(j).array() - mean(j)).square().matrix().dot(weights);
+    EXPECT_NEAR(mean(j), problem.mode(j), 0.1 * problem.posterior_sd(j)) << "parameter " << j;
+    EXPECT_NEAR(std::sqrt(variance), problem.posterior_sd(j), 0.1 * problem.posterior_sd(j)) << "parameter " << j;
+  }
+}
+
+
+// Focusing. y(u) = exp(15 u_0) + u_1 spans 1 to 3.3·10⁶ over the unit square; observed
+// 20.6 (u_0 ≈ 0.2) with σ = 1. Without a nugget (τ = 0) the plausible runs are exactly
+// those with |y_r − 20.6| ≤ 9 σ, and a prediction is the focused one where the global
+// emulator's I(u) = |20.6 − m(u)| / √(σ² + s²(u)) is at most 3, the global one elsewhere.
+TEST(FeatureEmulator, FocusLearnsThePlausibleRunsAndPredictsWithThemWhereThePointIsPlausible) {
+  const auto model = [](const Eigen::MatrixXd& u) {
+    return Eigen::VectorXd((15.0 * u.col(0).array()).exp() + u.col(1).array());
+  };
+  const Eigen::MatrixXd inputs = latin_hypercube(200, 2, 5);
+  const Eigen::MatrixXd features = model(inputs);
+  GaussianProcessOptions gp = EmulatorCalibrationOptions::default_gp();
+  gp.nugget_mode = NuggetMode::Off;
+  FeatureFocus focus;
+  focus.observed_mean = Eigen::VectorXd::Constant(1, 20.6);
+  focus.mean_variances = Eigen::VectorXd::Constant(1, 1.0);
+  focus.min_runs = 5;
+  const FeatureEmulator focused(inputs, features, gp, nullptr, {}, {}, focus);
+  const FeatureEmulator global(inputs, features, gp);
+  ASSERT_NE(focused.focused(), nullptr);
+  std::vector<Eigen::Index> plausible;
+  for (Eigen::Index r = 0; r < features.rows(); ++r)
+    if (std::abs(features(r) - 20.6) <= 9.0) plausible.push_back(r);
+  EXPECT_EQ(focused.focused_rows(), plausible);
+  ASSERT_GE(plausible.size(), 5u);
+
+  // Points along u_0 through the plausible band, at u_1 = 0.5.
+  Eigen::MatrixXd points(41, 2);
+  for (Eigen::Index k = 0; k < points.rows(); ++k) points.row(k) << 0.15 + 0.1 * k / 40.0, 0.5;
+  const FeaturePrediction with_focus = focused.predict(points), without = global.predict(points);
+  const FeaturePrediction local = focused.focused()->predict(points);
+  const Eigen::VectorXd implausibility = focused.implausibility(points);
+  const Eigen::VectorXd truth = model(points);
+  double error_focused = 0.0, error_global = 0.0;
+  int n_plausible = 0;
+  for (Eigen::Index k = 0; k < points.rows(); ++k) {
+    const double expected_i =
+        std::abs(20.6 - without.mean(k, 0)) / std::sqrt(1.0 + without.latent_variance(k, 0));
+    EXPECT_NEAR(implausibility(k), expected_i, 1e-9 * (1.0 + expected_i));
+    const FeaturePrediction& source = implausibility(k) <= 3.0 ? local : without;
+    EXPECT_EQ(with_focus.mean(k, 0), source.mean(k, 0)) << "point " << k;
+    EXPECT_EQ(with_focus.latent_variance(k, 0), source.latent_variance(k, 0)) << "point " << k;
+    n_plausible += implausibility(k) <= 3.0 ? 1 : 0;
+    if (implausibility(k) <= 3.0 && std::abs(truth(k) - 20.6) <= 6.0) {  // inside the learned band
+      error_focused = std::max(error_focused, std::abs(with_focus.mean(k, 0) - truth(k)));
+      error_global = std::max(error_global, std::abs(without.mean(k, 0) - truth(k)));
+    }
+  }
+  std::printf("%d plausible points; inside the band largest error focused %.3g, global %.3g (sigma 1)\n",
+              n_plausible, error_focused, error_global);
+  EXPECT_GE(n_plausible, 5);
+  // The global GP's signal variance is set by the 10⁶ of the far corner; the focused one
+  // fits the band to a fraction of σ.
+  EXPECT_LT(error_focused, 0.3);
+  EXPECT_LT(error_focused, 0.1 * error_global);
+
+  // Too few plausible runs: no focused emulator.
+  focus.min_runs = static_cast<int>(plausible.size()) + 1;
+  EXPECT_EQ(FeatureEmulator(inputs, features, gp, nullptr, {}, {}, focus).focused(), nullptr);
+}
+
+// The linear problem above with a far kink in one feature: f_0 += 10⁴ (u_0 − 0.8)²₊.
+// The posterior lies more than 6 sd below u_0 = 0.8 (asserted), where the kink is zero,
+// so its closed form is unchanged; the feature now spans 400 times its range without
+// the kink, which the emulators of all runs must fit, while the focused ones learn the
+// plausible runs only.
+TEST(EmulatorCalibration, FocusKeepsTheClosedFormPosteriorOfALinearModelWithAFarKink) {
+  const LinearProblem problem(11);
+  for (int j = 0; j < problem.d; ++j) ASSERT_LT(problem.mode(j) + 6.0 * problem.posterior_sd(j), 0.8);
+  const BatchFeatureFunction linear = problem.model();
+  const BatchFeatureFunction kinked = [&](const std::vector<Eigen::VectorXd>& points) {
+    std::vector<std::optional<Eigen::VectorXd>> values = linear(points);
+    for (std::size_t k = 0; k < points.size(); ++k) {
+      const double beyond = std::max(0.0, points[k](0) - 0.8);
+      (*values[k])(0) += 1e4 * beyond * beyond;
+    }
+    return values;
+  };
+  EmulatorCalibrationOptions options;
+  options.max_evaluations = 100;
+  options.focus = true;
+  const EmulatorCalibrationResult result = EmulatorCalibration(problem.d, kinked, problem.likelihood(), options).run();
+  std::printf("kinked linear 6-D with focus: %d runs, converged %d, ln Z %.4f (closed form %.4f), ESS %.0f\n",
+              result.n_evaluations, result.converged, result.log_evidence, problem.log_evidence, result.pool_ess);
+  for (const auto& it : result.history)
+    std::printf("  %d runs (%d plausible, weight %.3f): ln Z %.3f, variance ratio %.3g, influence %.3g, shift %.3g\n",
+                it.n_evaluations, it.n_focused, it.focused_weight, it.log_evidence, it.max_variance_ratio,
+                it.emulator_influence, it.quantile_shift);
+  EXPECT_TRUE(result.converged);
+  EXPECT_GT(result.history.back().n_focused, 0);
+  EXPECT_GT(result.history.back().focused_weight, 0.95);
+  EXPECT_NEAR(result.log_evidence, problem.log_evidence, std::log(1.05));
   Eigen::VectorXd weights = (result.pool_log_likelihood + result.pool_log_weight).array().exp().matrix();
   weights /= weights.sum();
   const Eigen::VectorXd mean = result.pool.transpose() * weights;
