@@ -616,6 +616,16 @@ Signal read_signal_csv(const std::string& path, std::vector<std::string>& warnin
     }
     return std::string();
   };
+  if (n > 1) {  // A weld record lasts milliseconds to seconds; hours mean a wrong time unit.
+    const ColumnSpec column = header_of(signal_column::time);
+    const double span = signal.time()[n - 1] - signal.time()[0];
+    if (span > 600.0) {
+      const double raw = span / column.scale;
+      throw SignalError(path + ": column '" + column.header + "' spans " + format_number(raw) + " " + column.unit +
+                        " = " + format_number(span) + " s, beyond the 10 min of any weld record" +
+                        likely_unit(column, raw, 1e-3, 600.0, {"ms", "s", "us"}));
+    }
+  }
   std::vector<bool> in_stage(static_cast<std::size_t>(n), true);
   if (signal.has_column(signal_column::current)) {
     const ColumnSpec column = header_of(signal_column::current);

@@ -15,7 +15,6 @@
 #include <fstream>
 #include <iomanip>
 #include <map>
-#include <regex>
 #include <sstream>
 #include <utility>
 
@@ -123,16 +122,6 @@ ConfigSchema build_schema() {
   return s;
 }
 
-const std::regex& name_pattern() {
-  static const std::regex pattern(R"([A-Za-z_][A-Za-z0-9_]*)");
-  return pattern;
-}
-
-const std::regex& key_pattern() {
-  static const std::regex pattern(R"([A-Za-z0-9_]+(\[[0-9]+\])?(\.[A-Za-z0-9_]+(\[[0-9]+\])?)*)");
-  return pattern;
-}
-
 std::string join_names(const std::vector<std::string>& names) {
   std::string text;
   for (std::size_t i = 0; i < names.size(); ++i) text += (i ? ", " : "") + names[i];
@@ -208,8 +197,9 @@ ParameterEntry read_parameter(const Config& config, int i, bool command_model) {
 
   p.name = config.text(key("name"));
   if (p.name.empty()) missing(config, "parameters", i, located_by, "name", "every parameter needs a name");
-  if (!std::regex_match(p.name, name_pattern())) {
-    config.fail(key("name"), "not a name; allowed: letters, digits and '_', not starting with a digit");
+  if (!fem::is_plain_name(p.name)) {
+    config.fail(key("name"), "not a name; allowed: letters, digits and '_', not starting with a digit, at most " +
+                                 std::to_string(fem::max_name_length) + " characters");
   }
   p.config_key = config.text(key("config_key"));
   if (p.config_key.empty() && command_model) p.config_key = p.name;
@@ -218,7 +208,7 @@ ParameterEntry read_parameter(const Config& config, int i, bool command_model) {
             "every parameter needs the weld-case key it sets, e.g. contact.sheet_sheet.film_thickness (a "
             "model.command needs none)");
   }
-  if (!std::regex_match(p.config_key, key_pattern())) {
+  if (!fem::is_key_path(p.config_key)) {
     config.fail(key("config_key"), "not a config key; allowed: names joined by '.', e.g. thermal.melt_conductivity");
   }
   p.unit = config.text(key("unit"));
@@ -374,7 +364,7 @@ Study::Study(Config config, fs::path file) : config_(std::move(config)), file_(s
     const std::string path = fem::item_path("features", k, "name");
     const std::string name = c.text(path);
     if (name.empty()) missing(c, "features", k, {"name"}, "name", "every feature item needs a name, e.g. {name: R_beta}");
-    if (!std::regex_match(name, name_pattern())) {
+    if (!fem::is_plain_name(name)) {
       c.fail(path, "not a feature name; allowed: letters, digits and '_', e.g. " + join_names(known_feature_names()));
     }
     if (std::find(features_.begin(), features_.end(), name) != features_.end()) {
@@ -449,7 +439,7 @@ Study::Study(Config config, fs::path file) : config_(std::move(config)), file_(s
     const std::string value_path = fem::item_path("model.set", k, "value");
     const std::string key = c.text(key_path);
     if (key.empty()) missing(c, "model.set", k, {"value"}, "key", "each override needs a key and a value");
-    if (!std::regex_match(key, key_pattern())) c.fail(key_path, "not a config key; allowed: names joined by '.'");
+    if (!fem::is_key_path(key)) c.fail(key_path, "not a config key; allowed: names joined by '.'");
     if (c.text(value_path).empty()) missing(c, "model.set", k, {"key"}, "value", "each override needs a value");
     for (std::size_t i = 0; i < parameters_.n_parameters(); ++i) {
       if (parameters_.parameter(i).config_key == key) {
@@ -532,7 +522,7 @@ void Study::check_model_inputs(const ForwardModel& model, const Eigen::MatrixXd&
     try {
       model.check_input(theta);
     } catch (const std::exception& e) {
-      throw fem::ConfigError("study '" + name_ + "': the model does not take " + where + " (" + describe(theta) +
+      throw fem::ConfigError(file_.string() + ": study '" + name_ + "': the model does not take " + where + " (" + describe(theta) +
                              "): " + e.what() + "; nothing was run");
     }
   };

@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -183,19 +184,31 @@ struct PathStep {
   int index = -1;
 };
 
+// Character classes of user text, checked by loops: std::regex recurses once per
+// character and overflows the stack on inputs of some ten thousand characters.
+bool is_name_character(char c) { return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_'; }
+bool is_digit(char c) { return c >= '0' && c <= '9'; }
+
 std::optional<std::vector<PathStep>> parse_path(const std::string& path) {
-  static const std::regex step_pattern(R"(([A-Za-z0-9_]+)(?:\[([0-9]{1,6})\])?)");
   std::vector<PathStep> steps;
   std::size_t start = 0;
   while (true) {
     const std::size_t dot = path.find('.', start);
     const std::string text =
         path.substr(start, dot == std::string::npos ? std::string::npos : dot - start);
-    std::smatch match;
-    if (!std::regex_match(text, match, step_pattern)) return std::nullopt;
+    // name, or name[index] with one to six digits
+    const std::size_t bracket = text.find('[');
+    const std::string name = text.substr(0, bracket);
+    if (name.empty() || !std::all_of(name.begin(), name.end(), is_name_character)) return std::nullopt;
     PathStep step;
-    step.name = match[1];
-    if (match[2].matched) step.index = std::stoi(match[2]);
+    step.name = name;
+    if (bracket != std::string::npos) {
+      const std::string index = text.substr(bracket + 1);
+      if (index.size() < 2 || index.size() > 7 || index.back() != ']' ||
+          !std::all_of(index.begin(), index.end() - 1, is_digit))
+        return std::nullopt;
+      step.index = std::stoi(index.substr(0, index.size() - 1));
+    }
     steps.push_back(step);
     if (dot == std::string::npos) break;
     start = dot + 1;
@@ -280,6 +293,13 @@ std::string range_bound(double value) {
 }
 
 }  // namespace
+
+bool is_plain_name(const std::string& text) {
+  return !text.empty() && text.size() <= max_name_length && !is_digit(text[0]) &&
+         std::all_of(text.begin(), text.end(), is_name_character);
+}
+
+bool is_key_path(const std::string& text) { return parse_path(text).has_value(); }
 
 // ---------------------------------------------------------------------------------
 // Ranges, declarations and the schema
@@ -833,8 +853,8 @@ struct Config::Loader {
         break;
       case KeyKind::integer: {
         const std::string text = scalar(key, node, origin, expected);
-        static const std::regex integer_pattern(R"([+-]?[0-9]{1,15})");
-        if (!std::regex_match(text, integer_pattern)) {
+        const std::size_t sign = !text.empty() && (text[0] == '+' || text[0] == '-') ? 1 : 0;
+        if (text.size() <= sign || text.size() - sign > 15 || !std::all_of(text.begin() + sign, text.end(), is_digit)) {
           fail(origin, key, "'" + text + "' is not an integer; expected " + expected);
         }
         value.integer = std::stoll(text);
@@ -864,8 +884,12 @@ struct Config::Loader {
         break;
       case KeyKind::identifier: {
         value.text = scalar(key, node, origin, expected);
-        static const std::regex identifier_pattern(R"([A-Za-z0-9_-]+)");
-        if (!std::regex_match(value.text, identifier_pattern)) {
+        if (value.text.size() > max_name_length) {
+          fail(origin, key, "a name of " + std::to_string(value.text.size()) + " characters; allowed: at most " +
+                                std::to_string(max_name_length));
+        }
+        if (value.text.empty() || !std::all_of(value.text.begin(), value.text.end(),
+                                               [](char c) { return is_name_character(c) || c == '-'; })) {
           fail(origin, key, "'" + value.text + "' is not a name; expected " + expected);
         }
         break;

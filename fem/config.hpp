@@ -172,6 +172,15 @@ struct ConfigTable {
 // "stack.sheets", 1, "thickness" -> "stack.sheets[1].thickness".
 std::string item_path(const std::string& list_path, int index, const std::string& key = "");
 
+// The longest name rsw accepts (names become folder and file names; NAME_MAX is 255).
+constexpr std::size_t max_name_length = 128;
+// A name of letters, digits and '_', not starting with a digit, at most max_name_length
+// characters (study, parameter and feature names).
+bool is_plain_name(const std::string& text);
+// A config key path: names of letters, digits and '_' joined by '.', each optionally
+// indexed as name[n] (n of one to six digits).
+bool is_key_path(const std::string& text);
+
 class Config {
  public:
   // Every key at its default.

@@ -9,6 +9,7 @@
 #include "physics/problem.hpp"
 #include "physics/weld_simulation.hpp"
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <unistd.h>
@@ -20,6 +21,10 @@ namespace fs = std::filesystem;
 WeldForwardModel::WeldForwardModel(const calibration::Study& study)
     : case_file_(study.case_file().string()), overrides_(study.model_overrides()),
       feature_names_(study.feature_names()) {
+  if (case_file_.empty())
+    throw fem::ConfigError(study.file().string() +
+                           ": model: no model.case (a weld-case file) and no model.command (a program); a study "
+                           "that runs needs one of them");
   const fem::ConfigSchema schema = physics::weld_case_schema();
   const auto& space = study.parameter_space();
   for (std::size_t i = 0; i < space.n_parameters(); ++i) {
@@ -49,7 +54,18 @@ fem::Config WeldForwardModel::config_at(const Eigen::VectorXd& theta) const {
   return config;
 }
 
-void WeldForwardModel::check_input(const Eigen::VectorXd& theta) const { physics::make_problem(config_at(theta)); }
+void WeldForwardModel::check_input(const Eigen::VectorXd& theta) const {
+  const physics::Problem problem = physics::make_problem(config_at(theta));
+  // The features a weld defines: the signals' and the nugget's, and a penetration per sheet.
+  std::vector<std::string> known = calibration::known_feature_names();
+  for (const auto& sheet : problem.geometry.sheets) known.push_back("penetration_" + sheet.name);
+  for (const std::string& name : feature_names_) {
+    if (std::find(known.begin(), known.end(), name) != known.end()) continue;
+    std::string allowed;
+    for (const std::string& k : known) allowed += (allowed.empty() ? "" : ", ") + k;
+    throw fem::ConfigError("feature '" + name + "' is not one a weld defines; allowed: " + allowed);
+  }
+}
 
 calibration::EvaluationResult WeldForwardModel::evaluate(const Eigen::VectorXd& theta) const {
   fs::path dir;
