@@ -9,6 +9,8 @@
 #include <fstream>
 #include <limits>
 
+#include "rsw_git_commit.hpp"
+
 #ifndef RSW_VERSION
 #define RSW_VERSION "unknown"
 #endif
@@ -143,6 +145,7 @@ void write_results_h5(const fs::path& file, const Problem& problem, const RunRes
   }
   h5.write_string("/run/config", problem.resolved_config);
   h5.set_attribute("/run", "version", std::string(RSW_VERSION));
+  h5.set_attribute("/run", "git_commit", std::string(RSW_GIT_COMMIT));
   h5.set_attribute("/run", "case", problem.name);
   h5.set_attribute("/run", "wall_time", std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count());
   h5.set_attribute("/run", "squeeze_indentation", result.squeeze_indentation);
@@ -173,6 +176,7 @@ void write_summary_json(const fs::path& file, const Problem& problem, const RunR
   j["status"] = "success";
   for (const auto& [part, seconds] : result.timing) j["timing_s"][part] = seconds;
   j["version"] = RSW_VERSION;
+  j["git_commit"] = RSW_GIT_COMMIT;
   j["case"] = problem.name;
   j["wall_time_s"] = result.wall_time;
   j["weld_steps"] = result.n_steps;

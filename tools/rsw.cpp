@@ -28,13 +28,15 @@
 #include <cstdlib>
 #include <exception>
 
+#include "rsw_git_commit.hpp"
+
 #ifndef RSW_VERSION
 #define RSW_VERSION "unknown"
 #endif
 
 int main(int argc, char** argv) {
   CLI::App app{"rsw: resistance spot welding simulation and calibration"};
-  app.set_version_flag("--version", std::string("rsw ") + RSW_VERSION);
+  app.set_version_flag("--version", std::string("rsw ") + RSW_VERSION + " (commit " + RSW_GIT_COMMIT + ")");
   app.require_subcommand(1);
   // One simulation uses one core by default: studies run one process per core, and
   // OpenMP threads that spin while other processes hold the cores slow a run down

@@ -13,6 +13,8 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <regex>
+#include <sstream>
 #include <string>
 
 namespace fs = std::filesystem;
@@ -129,6 +131,15 @@ TEST(RswSimulate, SqueezeRunWritesReadableResultsAndFields) {
   EXPECT_DOUBLE_EQ(time.back(), 0.01);
   EXPECT_NEAR(force.back(), 3000.0, 1e-6);
   EXPECT_NE(h5.read_string("/run/config").find("squeeze_only"), std::string::npos);
+  // Provenance: the source tree's commit (40 hex digits, "-modified" if tracked files
+  // differed from it at build time) or "unknown" outside a git work tree.
+  const std::string commit = h5.string_attribute("/run", "git_commit");
+  EXPECT_TRUE(commit == "unknown" || std::regex_match(commit, std::regex("[0-9a-f]{40}(-modified)?"))) << commit;
+  std::ifstream summary_file(dir / "summary.json");
+  std::stringstream summary;
+  summary << summary_file.rdbuf();
+  EXPECT_NE(summary.str().find("\"git_commit\": \"" + commit + "\""), std::string::npos);
+  EXPECT_NE(run_rsw("--version").output.find("(commit " + commit + ")"), std::string::npos);
   const auto steps = rsw::fem::read_pvd(dir / "fields.pvd");
   ASSERT_EQ(steps.size(), 3u);  // fields every 5 ms (output.field_interval): 0, 5 and 10 ms
   const auto last = rsw::fem::read_vtm(steps.back().file);
