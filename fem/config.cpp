@@ -753,6 +753,110 @@ std::string ConfigSchema::to_json() const {
   return root.dump(2) + "\n";
 }
 
+std::string ConfigSchema::to_json_schema() const {
+  using Json = nlohmann::ordered_json;
+  // A number bare (in the display unit, within the range) or as text with a unit.
+  const auto number_schema = [](const Range& range, const std::string& display_unit) {
+    Json bare = {{"type", "number"}};
+    if (!std::isinf(range.min)) bare[range.min_inclusive ? "minimum" : "exclusiveMinimum"] = range.min;
+    if (!std::isinf(range.max)) bare[range.max_inclusive ? "maximum" : "exclusiveMaximum"] = range.max;
+    Json with_unit = {{"type", "string"},
+                      {"pattern", R"(^\s*[-+]?([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][-+]?[0-9]+)?(\s*\S.*)?$)"}};
+    return Json{{"anyOf", Json::array({bare, with_unit})},
+                {"description", "bare numbers in " + display_unit + "; or a number and a unit"}};
+  };
+  const auto new_object = [](const std::string& description) {
+    Json object = {{"type", "object"}, {"additionalProperties", false}, {"properties", Json::object()}};
+    if (!description.empty()) object["description"] = description;
+    return object;
+  };
+  const auto section_doc = [this](const std::string& path) {
+    for (const auto& [section, doc] : section_docs_)
+      if (section == path) return doc;
+    return std::string();
+  };
+  Json root = {{"$schema", "http://json-schema.org/draft-07/schema#"},
+               {"title", title_},
+               {"type", "object"},
+               {"additionalProperties", false},
+               {"properties", Json::object()}};
+  for (const auto& spec : keys_) {
+    Json* node = &root;
+    std::string prefix;
+    std::size_t start = 0;
+    while (true) {
+      const std::size_t dot = spec.path.find('.', start);
+      if (dot == std::string::npos) break;
+      std::string segment = spec.path.substr(start, dot - start);
+      prefix += (prefix.empty() ? "" : ".") + segment;
+      const bool items = segment.size() > 2 && segment.compare(segment.size() - 2, 2, "[]") == 0;
+      if (items) segment.resize(segment.size() - 2);
+      Json& properties = (*node)["properties"];
+      if (items) {
+        Json& list = properties[segment];
+        if (!list.contains("items")) list["items"] = new_object("");
+        node = &list["items"];
+      } else {
+        if (!properties.contains(segment)) properties[segment] = new_object(section_doc(prefix));
+        node = &properties[segment];
+      }
+      start = dot + 1;
+    }
+    const std::string name = spec.path.substr(start);
+    Json leaf;
+    switch (spec.kind) {
+      case KeyKind::number:
+        leaf = number_schema(spec.range, spec.display_unit);
+        break;
+      case KeyKind::integer:
+        leaf = {{"type", "integer"}};
+        if (!std::isinf(spec.range.min)) leaf[spec.range.min_inclusive ? "minimum" : "exclusiveMinimum"] = spec.range.min;
+        if (!std::isinf(spec.range.max)) leaf[spec.range.max_inclusive ? "maximum" : "exclusiveMaximum"] = spec.range.max;
+        break;
+      case KeyKind::boolean:
+        leaf = {{"type", "boolean"}};
+        break;
+      case KeyKind::string:
+        leaf = {{"type", "string"}};
+        break;
+      case KeyKind::identifier:
+        leaf = {{"type", "string"}, {"pattern", "^[A-Za-z0-9_-]+$"}, {"maxLength", max_name_length}};
+        break;
+      case KeyKind::choice:
+        leaf = {{"enum", spec.choices}};
+        break;
+      case KeyKind::table: {
+        Json row = {{"type", "array"}, {"items", Json::array()}};
+        for (const auto& column : spec.columns) row["items"].push_back(number_schema(column.range, column.display_unit));
+        row["minItems"] = spec.columns.size();
+        row["maxItems"] = spec.columns.size();
+        leaf = {{"type", "array"}, {"items", row}};
+        break;
+      }
+      case KeyKind::list: {
+        Json& existing = (*node)["properties"][name];
+        leaf = {{"type", "array"}, {"items", existing.contains("items") ? existing["items"] : new_object("")}};
+        break;
+      }
+    }
+    if (spec.kind == KeyKind::table || spec.kind == KeyKind::list) {
+      if (spec.min_items > 0) leaf["minItems"] = spec.min_items;
+      if (spec.max_items != INT_MAX) leaf["maxItems"] = spec.max_items;
+    }
+    const std::string unit_note = leaf.contains("description") ? " (" + leaf["description"].get<std::string>() + ")" : "";
+    leaf["description"] = spec.doc + unit_note;
+    if (spec.kind == KeyKind::integer && !spec.default_value.empty()) {
+      leaf["default"] = std::stoll(spec.default_value);
+    } else if (spec.kind == KeyKind::boolean) {
+      leaf["default"] = spec.default_value == "true";
+    } else if (spec.kind != KeyKind::table && spec.kind != KeyKind::list) {
+      leaf["default"] = spec.default_value;
+    }
+    (*node)["properties"][name] = leaf;
+  }
+  return root.dump(2) + "\n";
+}
+
 // ---------------------------------------------------------------------------------
 // Origins, tables, paths
 

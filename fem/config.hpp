@@ -143,6 +143,10 @@ class ConfigSchema {
   std::string to_markdown() const;
   // The same as JSON: {"title", "keys": [{"path", "kind", "default", ...}]}.
   std::string to_json() const;
+  // JSON Schema (draft-07) of a config file: nested objects, no unknown keys, numbers bare
+  // (in the display unit, within the range) or with a unit, choices, tables, lists. For
+  // editors that check YAML against a schema; the loader's checks remain the authority.
+  std::string to_json_schema() const;
 
  private:
   KeyDeclaration declare(const std::string& path, KeyKind kind);

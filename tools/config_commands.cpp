@@ -28,11 +28,13 @@ void add_config_commands(CLI::App& app) {
 
   CLI::App* schema = config->add_subcommand("schema", "Print every weld-case key with default, unit, range and doc");
   schema->add_option("--format", options->format, "Output format")
-      ->check(CLI::IsMember({"markdown", "json"}))
+      ->check(CLI::IsMember({"markdown", "json", "json-schema"}))
       ->capture_default_str();
   schema->callback([options]() {
     const rsw::fem::ConfigSchema s = rsw::physics::weld_case_schema();
-    std::cout << (options->format == "json" ? s.to_json() : s.to_markdown());
+    std::cout << (options->format == "json"          ? s.to_json()
+                  : options->format == "json-schema" ? s.to_json_schema()
+                                                     : s.to_markdown());
   });
 
   CLI::App* show = config->add_subcommand("show", "Print the resolved weld case (every key, display units)");

@@ -9,7 +9,7 @@ packages=(
   libeigen3-dev            # dense/sparse linear algebra
   libsuitesparse-dev       # CHOLMOD, UMFPACK, KLU direct solvers
   libopenblas0-serial      # optimised BLAS/LAPACK under SuiteSparse (replaces reference BLAS)
-  libsundials-dev          # KINSOL / IDA (coupled time stepping)
+  libsundials-dev          # KINSOL's Anderson-accelerated fixed point (electro-thermal coupling)
   libvtk9-dev              # .vtu/.vtm/.pvd output and read-back in tests
   libhdf5-dev hdf5-tools   # results.h5 and h5dump
   libgtest-dev libgmock-dev
@@ -19,6 +19,7 @@ packages=(
   libnlopt-cxx-dev         # optimiser for GP hyperparameters
   libudunits2-dev          # unit suffixes in config values (8 kA, 1.0 mm)
   python3-matplotlib python3-h5py python3-numpy   # plot scripts (/usr/bin/python3)
+  python3-jsonschema python3-yaml   # test of the case file's JSON Schema
   libopenmpi-dev openmpi-bin   # studies over MPI ranks (rsw study run under mpirun)
 )
 

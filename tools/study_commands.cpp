@@ -453,11 +453,13 @@ void add_study_commands(CLI::App& app, ForwardModelFactory model_factory) {
 
   CLI::App* schema = study->add_subcommand("schema", "Print every study key with default, unit, range and doc");
   schema->add_option("--format", options->format, "Output format")
-      ->check(CLI::IsMember({"markdown", "json"}))
+      ->check(CLI::IsMember({"markdown", "json", "json-schema"}))
       ->capture_default_str();
   schema->callback([options]() {
     const fem::ConfigSchema s = cal::study_schema();
-    std::cout << (options->format == "json" ? s.to_json() : s.to_markdown());
+    std::cout << (options->format == "json"          ? s.to_json()
+                  : options->format == "json-schema" ? s.to_json_schema()
+                                                     : s.to_markdown());
   });
 }
 
