@@ -410,6 +410,24 @@ void Hdf5File::write_string(const std::string& path, const std::string& text) {
   write_dataset(id(), path_, p, type.get(), type.get(), {}, &data);
 }
 
+void Hdf5File::write_scalar(const std::string& path, double value) {
+  ApiScope scope;
+  const std::string p = normalise(path);
+  require_writable("write dataset", p);
+  remove_if_exists(p);
+  write_dataset(id(), path_, p, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {}, &value);
+}
+
+double Hdf5File::read_scalar(const std::string& path) const {
+  ApiScope scope;
+  const std::string p = normalise(path);
+  auto [dset, dims] = open_with_rank(id(), path_, p, 0);
+  double value = 0.0;
+  check(H5Dread(dset.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, &value), path_, p,
+        "cannot read dataset");
+  return value;
+}
+
 std::vector<double> Hdf5File::read_doubles(const std::string& path) const {
   ApiScope scope;
   return read_1d<double>(id(), path_, normalise(path), H5T_NATIVE_DOUBLE);

@@ -72,8 +72,10 @@ class Hdf5File {
   void write(const std::string& path, const std::vector<int>& values);
   void write(const std::string& path, const RowMajorMatrix& matrix);
   void write_string(const std::string& path, const std::string& text);
+  void write_scalar(const std::string& path, double value);  // a scalar dataspace (shape ())
 
   std::vector<double> read_doubles(const std::string& path) const;  // 1-D dataset
+  double read_scalar(const std::string& path) const;                // scalar dataset
   std::vector<int> read_ints(const std::string& path) const;        // 1-D dataset
   RowMajorMatrix read_matrix(const std::string& path) const;        // 2-D dataset
   std::string read_string(const std::string& path) const;           // scalar string

@@ -220,6 +220,18 @@ vtkSmartPointer<vtkStringArray> string_array(const char* name,
   return a;
 }
 
+// "name [unit]" for each field of the lists that has a unit, each name once.
+std::vector<std::string> unit_legend(std::initializer_list<const std::vector<Field>*> lists) {
+  std::vector<std::string> legend;
+  for (const auto* list : lists)
+    for (const Field& f : *list) {
+      if (f.unit.empty()) continue;
+      const std::string entry = f.name + " [" + f.unit + "]";
+      if (std::find(legend.begin(), legend.end(), entry) == legend.end()) legend.push_back(entry);
+    }
+  return legend;
+}
+
 // --- checks ------------------------------------------------------------------------
 
 void check_mesh(const Mesh& mesh) {
@@ -398,6 +410,7 @@ vtkSmartPointer<vtkUnstructuredGrid> body_grid(const Mesh& mesh, const BodyPart&
     cell_data->AddArray(a);
   }
   grid->GetFieldData()->AddArray(string_array("body_names", mesh.body_names));
+  grid->GetFieldData()->AddArray(string_array("units", unit_legend({&fields.point_fields, &fields.cell_fields})));
   return grid;
 }
 
@@ -460,6 +473,7 @@ vtkSmartPointer<vtkPolyData> body_boundaries(const Mesh& mesh, int body,
         set_tuple(a, i, f, static_cast<std::size_t>(lines[i].face_index));
   }
   poly->GetFieldData()->AddArray(string_array("boundary_names", boundary_names));
+  poly->GetFieldData()->AddArray(string_array("units", unit_legend({&fields.point_fields, &fields.face_fields})));
   return poly;
 }
 
@@ -469,12 +483,13 @@ vtkSmartPointer<vtkPolyData> body_boundaries(const Mesh& mesh, int body,
 
 namespace {
 Field make_field(const std::string& name, int n_components, std::vector<double> values,
-                 const std::string& boundary = {}) {
+                 const std::string& boundary = {}, const std::string& unit = {}) {
   Field f;
   f.name = name;
   f.n_components = n_components;
   f.values = std::move(values);
   f.boundary = boundary;
+  f.unit = unit;
   return f;
 }
 
@@ -492,36 +507,36 @@ void add_unique(std::vector<Field>& fields, Field f, const std::set<std::string>
 }
 }  // namespace
 
-FieldSet& FieldSet::add_point_scalar(const std::string& name, std::vector<double> values) {
-  add_unique(point_fields, make_field(name, 1, std::move(values)), reserved_point_names, "point");
+FieldSet& FieldSet::add_point_scalar(const std::string& name, std::vector<double> values, const std::string& unit) {
+  add_unique(point_fields, make_field(name, 1, std::move(values), "", unit), reserved_point_names, "point");
   return *this;
 }
 
-FieldSet& FieldSet::add_point_vector(const std::string& name, std::vector<double> values) {
-  add_unique(point_fields, make_field(name, 2, std::move(values)), reserved_point_names, "point");
+FieldSet& FieldSet::add_point_vector(const std::string& name, std::vector<double> values, const std::string& unit) {
+  add_unique(point_fields, make_field(name, 2, std::move(values), "", unit), reserved_point_names, "point");
   return *this;
 }
 
-FieldSet& FieldSet::add_cell_scalar(const std::string& name, std::vector<double> values) {
-  add_unique(cell_fields, make_field(name, 1, std::move(values)), reserved_cell_names, "cell");
+FieldSet& FieldSet::add_cell_scalar(const std::string& name, std::vector<double> values, const std::string& unit) {
+  add_unique(cell_fields, make_field(name, 1, std::move(values), "", unit), reserved_cell_names, "cell");
   return *this;
 }
 
-FieldSet& FieldSet::add_cell_vector(const std::string& name, std::vector<double> values) {
-  add_unique(cell_fields, make_field(name, 2, std::move(values)), reserved_cell_names, "cell");
+FieldSet& FieldSet::add_cell_vector(const std::string& name, std::vector<double> values, const std::string& unit) {
+  add_unique(cell_fields, make_field(name, 2, std::move(values), "", unit), reserved_cell_names, "cell");
   return *this;
 }
 
 FieldSet& FieldSet::add_face_scalar(const std::string& name, const std::string& boundary,
-                                    std::vector<double> values) {
-  add_unique(face_fields, make_field(name, 1, std::move(values), boundary), reserved_face_names,
+                                    std::vector<double> values, const std::string& unit) {
+  add_unique(face_fields, make_field(name, 1, std::move(values), boundary, unit), reserved_face_names,
              "face");
   return *this;
 }
 
 FieldSet& FieldSet::add_face_vector(const std::string& name, const std::string& boundary,
-                                    std::vector<double> values) {
-  add_unique(face_fields, make_field(name, 2, std::move(values), boundary), reserved_face_names,
+                                    std::vector<double> values, const std::string& unit) {
+  add_unique(face_fields, make_field(name, 2, std::move(values), boundary, unit), reserved_face_names,
              "face");
   return *this;
 }

@@ -44,9 +44,11 @@ struct Field {
   int n_components = 1;        // 1 (scalar) or 2 (vector (r, z))
   std::vector<double> values;  // n_components per entity
   std::string boundary;        // face fields only: the boundary the faces belong to
+  std::string unit;            // e.g. "degC", "Pa"; "" if none is given
 };
 
-// The fields written with a mesh. Names are unique within point fields and within
+// The fields written with a mesh. Each block's field data holds a string array
+// "units" with "name [unit]" for every field of the block given a unit. Names are unique within point fields and within
 // cell fields and may not shadow the arrays the writer adds itself; face fields of
 // one name may be given on several boundaries (one array per name in the output).
 // Sizes are checked against the mesh when written.
@@ -55,14 +57,14 @@ struct FieldSet {
   std::vector<Field> cell_fields;
   std::vector<Field> face_fields;
 
-  FieldSet& add_point_scalar(const std::string& name, std::vector<double> values);
-  FieldSet& add_point_vector(const std::string& name, std::vector<double> values);
-  FieldSet& add_cell_scalar(const std::string& name, std::vector<double> values);
-  FieldSet& add_cell_vector(const std::string& name, std::vector<double> values);
+  FieldSet& add_point_scalar(const std::string& name, std::vector<double> values, const std::string& unit = "");
+  FieldSet& add_point_vector(const std::string& name, std::vector<double> values, const std::string& unit = "");
+  FieldSet& add_cell_scalar(const std::string& name, std::vector<double> values, const std::string& unit = "");
+  FieldSet& add_cell_vector(const std::string& name, std::vector<double> values, const std::string& unit = "");
   FieldSet& add_face_scalar(const std::string& name, const std::string& boundary,
-                            std::vector<double> values);
+                            std::vector<double> values, const std::string& unit = "");
   FieldSet& add_face_vector(const std::string& name, const std::string& boundary,
-                            std::vector<double> values);
+                            std::vector<double> values, const std::string& unit = "");
 };
 
 // Writes `mesh` and `fields` as the multiblock file `vtm_path` (extension .vtm) with

@@ -261,32 +261,44 @@ void WeldDriver::register_signals() {
   signals_ = std::make_unique<SignalRecorder<RecordedState>>(result_.signals);
   auto& s = *signals_;
   using S = const RecordedState&;
-  s.add("time", "s", [](S r) { return r.time; });
-  s.add("current", "A", [](S r) { return r.current; });
-  s.add("voltage", "V", [](S r) { return r.have_electrical ? r.voltage : 0.0; });
-  s.add("resistance", "ohm", [](S r) {
+  s.add("time", "s", "schedule time (0 where the current and force tables start)", [](S r) { return r.time; });
+  s.add("current", "A", "welding current", [](S r) { return r.current; });
+  s.add("voltage", "V", "voltage between the electrodes",
+        [](S r) { return r.have_electrical ? r.voltage : 0.0; });
+  s.add("resistance", "ohm", "dynamic resistance, voltage / current (NaN below 1 A)", [](S r) {
     return (r.have_electrical && std::abs(r.current) > 1.0) ? r.voltage / r.current : std::nan("");
   });
-  s.add("force", "N", [](S r) { return r.force; });
-  s.add("displacement", "m", [](S r) { return r.displacement; });
-  s.add("temperature", "degC", [](S r) { return r.max_temperature; });
+  s.add("force", "N", "electrode force", [](S r) { return r.force; });
+  s.add("displacement", "m", "electrode displacement S: the upper electrode's end face since the squeeze ended",
+        [](S r) { return r.displacement; });
+  s.add("temperature", "degC", "highest temperature in the sheets", [](S r) { return r.max_temperature; });
   for (std::size_t i = 0; i < problem_.geometry.sheets.size(); ++i)
     s.add("temperature_" + problem_.geometry.sheets[i].name, "degC",
+          "highest temperature in " + problem_.geometry.sheets[i].name,
           [i](S r) { return r.sheet_max_temperature[i]; });
-  s.add("d_n_liq", "m", [](S r) { return r.liquidus.diameter; });
-  s.add("h_n_liq", "m", [](S r) { return r.liquidus.height; });
-  s.add("d_n_sol", "m", [](S r) { return r.solidus.diameter; });
-  s.add("h_n_sol", "m", [](S r) { return r.solidus.height; });
+  s.add("d_n_liq", "m", "nugget diameter at the liquidus (peak-temperature field)",
+        [](S r) { return r.liquidus.diameter; });
+  s.add("h_n_liq", "m", "nugget height at the liquidus (peak-temperature field)",
+        [](S r) { return r.liquidus.height; });
+  s.add("d_n_sol", "m", "nugget diameter at the solidus (peak-temperature field)",
+        [](S r) { return r.solidus.diameter; });
+  s.add("h_n_sol", "m", "nugget height at the solidus (peak-temperature field)",
+        [](S r) { return r.solidus.height; });
   const auto states = mech_->interface_states();
   for (std::size_t i = 0; i < states.size(); ++i)
-    s.add("contact_radius_" + states[i].name, "m", [i](S r) { return r.interfaces[i].contact_radius; });
+    s.add("contact_radius_" + states[i].name, "m", "contact radius of interface " + states[i].name,
+          [i](S r) { return r.interfaces[i].contact_radius; });
   for (std::size_t i = 0; i < states.size(); ++i)
-    s.add("joule_power_" + states[i].name, "W", [i](S r) { return r.interface_power[i]; });
-  s.add("joule_power_bulk", "W", [](S r) { return r.bulk_power; });
-  s.add("electrical_energy", "J", [](S r) { return r.electrical_energy; });
-  s.add("stored_energy", "J", [](S r) { return r.stored_energy; });
-  s.add("removed_energy", "J", [](S r) { return r.removed_energy; });
-  s.add("coupling_iterations", "1", [](S r) { return static_cast<double>(r.coupling_iterations); });
+    s.add("joule_power_" + states[i].name, "W", "Joule heat of interface " + states[i].name + "'s contact resistance",
+          [i](S r) { return r.interface_power[i]; });
+  s.add("joule_power_bulk", "W", "Joule heat in the bodies", [](S r) { return r.bulk_power; });
+  s.add("electrical_energy", "J", "electrical energy delivered, the integral of voltage times current",
+        [](S r) { return r.electrical_energy; });
+  s.add("stored_energy", "J", "heat stored in the bodies (enthalpy gained)", [](S r) { return r.stored_energy; });
+  s.add("removed_energy", "J", "heat removed by the cooling water, the air and fixed temperatures",
+        [](S r) { return r.removed_energy; });
+  s.add("coupling_iterations", "1", "electro-thermal coupling iterations of the step",
+        [](S r) { return static_cast<double>(r.coupling_iterations); });
 }
 
 std::vector<double> WeldDriver::peak_temperature() const {

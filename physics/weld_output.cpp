@@ -8,6 +8,7 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <map>
 
 #include "rsw_git_commit.hpp"
 
@@ -33,28 +34,28 @@ void WeldFieldWriter::write_if_due(double t, const fem::Mesh& mesh, const Mechan
   const Eigen::VectorXd& T = thermal.committed_temperature();
   fem::FieldSet fields;
   const Eigen::VectorXd u = mech.displacement();
-  fields.add_point_vector("displacement", std::vector<double>(u.data(), u.data() + u.size()));
-  fields.add_point_scalar("temperature", std::vector<double>(T.data(), T.data() + T.size()));
-  fields.add_point_scalar("peak_temperature", peak);
+  fields.add_point_vector("displacement", std::vector<double>(u.data(), u.data() + u.size()), "m");
+  fields.add_point_scalar("temperature", std::vector<double>(T.data(), T.data() + T.size()), "degC");
+  fields.add_point_scalar("peak_temperature", peak, "degC");
   const Eigen::VectorXd fl = thermal.liquid_fraction();
-  fields.add_point_scalar("liquid_fraction", std::vector<double>(fl.data(), fl.data() + fl.size()));
+  fields.add_point_scalar("liquid_fraction", std::vector<double>(fl.data(), fl.data() + fl.size()), "1");
   if (have_electrical) {
     const Eigen::VectorXd& phi = electrical.solution().potential;
-    fields.add_point_scalar("potential", std::vector<double>(phi.data(), phi.data() + phi.size()));
-    fields.add_cell_scalar("joule_heat", electrical.cell_joule_heat());
+    fields.add_point_scalar("potential", std::vector<double>(phi.data(), phi.data() + phi.size()), "V");
+    fields.add_cell_scalar("joule_heat", electrical.cell_joule_heat(), "W/m^3");
     std::vector<double> j;
     for (const auto& v : electrical.cell_current_density()) {
       j.push_back(v.x());
       j.push_back(v.y());
     }
-    fields.add_cell_vector("current_density", j);
+    fields.add_cell_vector("current_density", j, "A/m^2");
   } else {
-    fields.add_point_scalar("potential", std::vector<double>(mesh.n_nodes(), 0.0));
-    fields.add_cell_scalar("joule_heat", std::vector<double>(mesh.n_cells(), 0.0));
-    fields.add_cell_vector("current_density", std::vector<double>(2 * mesh.n_cells(), 0.0));
+    fields.add_point_scalar("potential", std::vector<double>(mesh.n_nodes(), 0.0), "V");
+    fields.add_cell_scalar("joule_heat", std::vector<double>(mesh.n_cells(), 0.0), "W/m^3");
+    fields.add_cell_vector("current_density", std::vector<double>(2 * mesh.n_cells(), 0.0), "A/m^2");
   }
-  fields.add_cell_scalar("von_mises_stress", mech.von_mises());
-  fields.add_cell_scalar("equivalent_plastic_strain", mech.equivalent_plastic_strain());
+  fields.add_cell_scalar("von_mises_stress", mech.von_mises(), "Pa");
+  fields.add_cell_scalar("equivalent_plastic_strain", mech.equivalent_plastic_strain(), "1");
   const auto& pairings = mech.pairings();
   const auto& htc = thermal.interface_conductance();
   for (std::size_t p = 0; p < pairings.size(); ++p) {
@@ -73,10 +74,10 @@ void WeldFieldWriter::write_if_due(double t, const fem::Mesh& mesh, const Mechan
         if (p < htc.size() && i < static_cast<int>(htc[p].size())) face_htc[f] += htc[p][i] / n_g;
       }
     const std::string& b = pairings[p].slave_boundary();
-    fields.add_face_scalar("contact_pressure", b, face_p);
-    fields.add_face_scalar("contact_gap", b, face_g);
-    fields.add_face_scalar("electrical_conductance", b, face_he);
-    fields.add_face_scalar("thermal_conductance", b, face_htc);
+    fields.add_face_scalar("contact_pressure", b, face_p, "Pa");
+    fields.add_face_scalar("contact_gap", b, face_g, "m");
+    fields.add_face_scalar("electrical_conductance", b, face_he, "S/m^2");
+    fields.add_face_scalar("thermal_conductance", b, face_htc, "W/(m^2*K)");
   }
   series_.write_step(t, mesh, fields);
 }
@@ -96,6 +97,33 @@ void ContactProfiles::add(double t, const std::vector<InterfaceState>& states) {
 }
 
 namespace {
+// One line on each of the run's final nugget and energy values (results.h5).
+std::string nugget_description(const std::string& name) {
+  static const std::map<std::string, std::string> known = {
+      {"d_n_liq", "nugget diameter at the liquidus, at the end (peak-temperature field)"},
+      {"h_n_liq", "nugget height at the liquidus, at the end (peak-temperature field)"},
+      {"d_n_sol", "nugget diameter at the solidus, at the end (peak-temperature field)"},
+      {"h_n_sol", "nugget height at the solidus, at the end (peak-temperature field)"},
+      {"w_elec", "electrode/sheet contact width at the end: twice the mean contact radius of those interfaces"},
+      {"d_indent", "indentation depth of the electrodes at the end"},
+      {"t_unmolt", "unmolten thickness on the axis: the smaller distance from the liquidus nugget to the outer surfaces"}};
+  if (const auto it = known.find(name); it != known.end()) return it->second;
+  if (name.rfind("penetration_", 0) == 0)
+    return "z-extent of the liquidus nugget inside " + name.substr(12) + " on the axis, over its thickness";
+  return name;
+}
+
+std::string energy_description(const std::string& name) {
+  static const std::map<std::string, std::string> known = {
+      {"electrical", "electrical energy delivered over the run"},
+      {"stored", "heat stored in the bodies over the run (enthalpy gained)"},
+      {"removed", "heat removed by the cooling water, the air and fixed temperatures over the run"},
+      {"imbalance", "electrical - stored - removed: the energy balance's error"},
+      {"nugget_fraction", "share of the electrical energy held in the nugget when the current stops"}};
+  if (const auto it = known.find(name); it != known.end()) return it->second;
+  return name;
+}
+
 fem::RowMajorMatrix to_matrix(const std::vector<std::vector<double>>& rows) {
   fem::RowMajorMatrix m;
   m.n_rows = rows.size();
@@ -110,9 +138,14 @@ void write_results_h5(const fs::path& file, const Problem& problem, const RunRes
                       std::chrono::steady_clock::time_point t_start) {
   const Signals& sig = result.signals;
   fem::Hdf5File h5(file, fem::Hdf5Mode::truncate);
+  const auto describe = [&h5](const std::string& path, const std::string& unit, const std::string& description) {
+    if (!unit.empty()) h5.set_attribute(path, "unit", unit);
+    h5.set_attribute(path, "description", description);
+  };
   for (std::size_t c = 0; c < sig.names.size(); ++c) {
     h5.write("/signals/" + sig.names[c], sig.columns[c]);
-    h5.set_attribute("/signals/" + sig.names[c], "unit", sig.units[c]);
+    describe("/signals/" + sig.names[c], sig.units[c],
+             (c < sig.descriptions.size() ? sig.descriptions[c] : sig.names[c]) + ", at each output time");
   }
   std::vector<double> sq_force, sq_disp, sq_iter;
   for (const auto& s : squeeze.steps) {
@@ -121,29 +154,33 @@ void write_results_h5(const fs::path& file, const Problem& problem, const RunRes
     sq_iter.push_back(s.iterations);
   }
   h5.write("/squeeze/force", sq_force);
-  h5.set_attribute("/squeeze/force", "unit", std::string("N"));
+  describe("/squeeze/force", "N", "electrode force at each squeeze step");
   h5.write("/squeeze/displacement", sq_disp);
-  h5.set_attribute("/squeeze/displacement", "unit", std::string("m"));
+  describe("/squeeze/displacement", "m", "upper electrode end-face displacement at each squeeze step");
   h5.write("/squeeze/newton_iterations", sq_iter);
+  describe("/squeeze/newton_iterations", "1", "Newton iterations of each squeeze step");
   h5.write("/contact/output_times", profiles.times);
+  describe("/contact/output_times", "s", "times of the rows of the contact profiles");
   for (std::size_t i = 0; i < profiles.names.size(); ++i) {
     const std::string g = "/contact/" + profiles.names[i];
+    const std::string where = " of interface " + profiles.names[i] + ": a row per output time, a column per contact point";
     h5.write(g + "/radius", to_matrix(profiles.radius[i]));
-    h5.set_attribute(g + "/radius", "unit", std::string("m"));
+    describe(g + "/radius", "m", "radius of the contact points" + where);
     h5.write(g + "/pressure", to_matrix(profiles.pressure[i]));
-    h5.set_attribute(g + "/pressure", "unit", std::string("Pa"));
+    describe(g + "/pressure", "Pa", "contact pressure" + where);
     h5.write(g + "/gap", to_matrix(profiles.gap[i]));
-    h5.set_attribute(g + "/gap", "unit", std::string("m"));
+    describe(g + "/gap", "m", "normal gap (negative: penetration)" + where);
   }
   for (const auto& [name, value] : result.nugget) {
-    h5.write("/nugget/" + name, std::vector<double>{value});
-    h5.set_attribute("/nugget/" + name, "unit", std::string(name.rfind("penetration", 0) == 0 ? "1" : "m"));
+    h5.write_scalar("/nugget/" + name, value);
+    describe("/nugget/" + name, name.rfind("penetration_", 0) == 0 ? "1" : "m", nugget_description(name));
   }
   for (const auto& [name, value] : result.energy) {
-    h5.write("/energy/" + name, std::vector<double>{value});
-    h5.set_attribute("/energy/" + name, "unit", std::string(name == "nugget_fraction" ? "1" : "J"));
+    h5.write_scalar("/energy/" + name, value);
+    describe("/energy/" + name, name == "nugget_fraction" ? "1" : "J", energy_description(name));
   }
   h5.write_string("/run/config", problem.resolved_config);
+  describe("/run/config", "", "the resolved weld case: every key, in display units (YAML)");
   h5.set_attribute("/run", "version", std::string(RSW_VERSION));
   h5.set_attribute("/run", "git_commit", std::string(RSW_GIT_COMMIT));
   h5.set_attribute("/run", "case", problem.name);

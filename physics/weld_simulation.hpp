@@ -50,6 +50,7 @@ std::vector<double> weld_step_times(const Problem& problem);
 struct Signals {
   std::vector<std::string> names;
   std::vector<std::string> units;
+  std::vector<std::string> descriptions;
   std::vector<std::vector<double>> columns;
   int column(const std::string& name) const;  // -1 if absent
   std::size_t n_rows() const { return columns.empty() ? 0 : columns.front().size(); }

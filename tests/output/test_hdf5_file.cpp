@@ -68,6 +68,17 @@ TEST_F(Hdf5File, DatasetsRoundTripThroughReopenedFile) {
   EXPECT_EQ(file.shape("/signals/t"), (std::vector<std::size_t>{4}));
 }
 
+TEST_F(Hdf5File, ScalarIsWrittenWithAScalarDataspaceAndReadBack) {
+  {
+    rsw::fem::Hdf5File file(path_, rsw::fem::Hdf5Mode::truncate);
+    file.write_scalar("/energy/stored", 1234.5);
+  }
+  rsw::fem::Hdf5File file(path_, rsw::fem::Hdf5Mode::read);
+  EXPECT_EQ(file.read_scalar("/energy/stored"), 1234.5);
+  EXPECT_EQ(file.shape("/energy/stored"), std::vector<std::size_t>{});
+  EXPECT_THROW(file.read_doubles("/energy/stored"), std::runtime_error);  // not a 1-D dataset
+}
+
 TEST_F(Hdf5File, MatrixRoundTripsRowMajor) {
   RowMajorMatrix m{2, 3, {1, 2, 3, 4, 5, 6}};
   {

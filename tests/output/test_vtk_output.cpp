@@ -222,6 +222,23 @@ TEST_F(VtkOutput, FaceFieldCoversItsBoundaryAndIsNanElsewhere) {
   EXPECT_EQ(electrode.cell_array("contact_pressure").values, (std::vector<double>{3e8, 4e8}));
 }
 
+TEST_F(VtkOutput, EachBlockListsTheUnitsOfItsFieldsInItsFieldData) {
+  const Mesh mesh = two_body_mesh();
+  FieldSet fields;
+  fields.add_point_scalar("temperature", std::vector<double>(static_cast<std::size_t>(mesh.n_nodes()), 20.0), "degC")
+      .add_cell_scalar("stress", std::vector<double>(static_cast<std::size_t>(mesh.n_cells()), 1e6), "Pa")
+      .add_cell_scalar("marker", std::vector<double>(static_cast<std::size_t>(mesh.n_cells()), 1.0))
+      .add_face_scalar("contact_pressure", "sheet_1.top", {1e8, 2e8}, "Pa")
+      .add_face_scalar("contact_pressure", "electrode.bottom", {3e8, 4e8}, "Pa");
+  const fs::path vtm = dir_ / "weld.vtm";
+  rsw::fem::write_vtm(vtm, mesh, fields);
+  const auto data = rsw::fem::read_vtm(vtm);
+  // A field without a unit is not listed; a face field given on two boundaries once.
+  EXPECT_EQ(data.block("sheet_1").strings("units"), (std::vector<std::string>{"temperature [degC]", "stress [Pa]"}));
+  EXPECT_EQ(data.block("sheet_1_boundaries").strings("units"),
+            (std::vector<std::string>{"temperature [degC]", "contact_pressure [Pa]"}));
+}
+
 TEST_F(VtkOutput, PvdListsEveryWrittenStep) {
   const Mesh mesh = two_body_mesh();
   const std::vector<double> times = {0.0, 1e-3 / 3, 2e-3 / 3, 0.02};

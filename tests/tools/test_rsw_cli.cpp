@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <filesystem>
@@ -145,6 +146,9 @@ TEST(RswSimulate, SqueezeRunWritesReadableResultsAndFields) {
   const auto last = rsw::fem::read_vtm(steps.back().file);
   EXPECT_GT(last.block("sheet_1").point_array("displacement").n_tuples(), 0);
   EXPECT_GT(last.block("sheet_1").cell_array("von_mises_stress").n_tuples(), 0);
+  const auto& units = last.block("sheet_1").strings("units");
+  for (const char* entry : {"displacement [m]", "temperature [degC]", "von_mises_stress [Pa]", "joule_heat [W/m^3]"})
+    EXPECT_NE(std::find(units.begin(), units.end(), entry), units.end()) << entry;
   EXPECT_TRUE(fs::exists(dir / "summary.json"));
   EXPECT_TRUE(fs::exists(dir / "signals.csv"));
   EXPECT_FALSE(fs::exists(dir / "partial"));

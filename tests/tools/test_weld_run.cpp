@@ -276,7 +276,13 @@ TEST(WeldRun, FieldsOpenInVtkAndSignalsInHdf5) {
     EXPECT_EQ(sheet.cell_array(a).n_tuples(), sheet.n_cells) << a;
   rsw::fem::Hdf5File h5(coarse_run() / "results.h5", rsw::fem::Hdf5Mode::read);
   EXPECT_EQ(h5.read_doubles("/signals/voltage").size(), 17u);
-  EXPECT_GT(h5.read_doubles("/nugget/d_n_liq").at(0), 0.0);
+  EXPECT_GT(h5.read_scalar("/nugget/d_n_liq"), 0.0);  // a true scalar, shape ()
+  EXPECT_EQ(h5.shape("/nugget/d_n_liq"), std::vector<std::size_t>{});
+  // Every dataset carries a description; those with a dimension a unit.
+  for (const char* path : {"/signals/voltage", "/signals/temperature", "/nugget/d_n_liq", "/energy/stored",
+                           "/squeeze/force", "/run/config"})
+    EXPECT_FALSE(h5.string_attribute(path, "description").empty()) << path;
+  EXPECT_EQ(h5.string_attribute("/signals/temperature", "unit"), "degC");
   std::string out;
   EXPECT_EQ(std::system(("h5dump -H " + (coarse_run() / "results.h5").string() + " > /dev/null").c_str()), 0);
 }
