@@ -556,12 +556,42 @@ PosteriorResult Calibration::run_sbalc(const RunBatch& evaluate_runs, const std:
   return SirPosterior(sbalc, options_.posterior).run();
 }
 
+InputMap log_product_map(const ParameterSpace& parameters,
+                         const std::vector<EmulatorCalibrationOptions::LogProduct>& products) {
+  // z = (Σ log10 θ_i(u) − Σ log10 a_i) / (Σ log10 b_i − Σ log10 a_i) over each product.
+  std::vector<double> low, span;
+  for (const auto& product : products) {
+    double a = 0.0, b = 0.0;
+    for (std::size_t i : product.parameters) {
+      a += std::log10(parameters.parameter(i).prior.lower());
+      b += std::log10(parameters.parameter(i).prior.upper());
+    }
+    low.push_back(a);
+    span.push_back(b - a);
+  }
+  return [&parameters, products, low, span](const Eigen::MatrixXd& points) {
+    const auto k = static_cast<Eigen::Index>(products.size());
+    Eigen::MatrixXd mapped(points.rows(), points.cols() + k);
+    mapped.leftCols(points.cols()) = points;
+    for (Eigen::Index r = 0; r < points.rows(); ++r)
+      for (Eigen::Index q = 0; q < k; ++q) {
+        double sum = 0.0;
+        for (std::size_t i : products[static_cast<std::size_t>(q)].parameters)
+          sum += std::log10(parameters.parameter(i).prior.quantile(points(r, static_cast<Eigen::Index>(i))));
+        mapped(r, points.cols() + q) = (sum - low[static_cast<std::size_t>(q)]) / span[static_cast<std::size_t>(q)];
+      }
+    return mapped;
+  };
+}
+
 PosteriorResult Calibration::run_emulator(const RunBatch& evaluate_runs,
                                           const std::optional<Eigen::MatrixXd>& initial_design,
                                           CalibrationResult& result) const {
   const std::size_t d = design_.parameters.n_parameters();
   EmulatorCalibrationOptions emulator_options = options_.emulator;
   if (initial_design) emulator_options.initial_design = *initial_design;
+  if (!emulator_options.log_products.empty())
+    emulator_options.input_map = log_product_map(design_.parameters, emulator_options.log_products);
   if (options_.progress != nullptr) {
     std::ostream& out = *options_.progress;
     emulator_options.on_iteration = [&out, this](const EmulatorIteration& it) {

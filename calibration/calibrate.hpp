@@ -217,6 +217,13 @@ struct CalibrationResult {
 // 2⁻⁵³ so that normal priors stay finite).
 Eigen::VectorXd unit_to_physical(const ParameterSpace& parameters, const Eigen::VectorXd& unit_point);
 
+// The emulators' input map of log products: each unit-cube point with, per product,
+// z = (Σ log10 θ_i − Σ log10 a_i) / (Σ log10 b_i − Σ log10 a_i) appended, θ_i = F_i⁻¹(u_i)
+// and [a_i, b_i] the prior's bounds (positive). For log10-uniform priors z is linear in u.
+// `parameters` must outlive the map.
+InputMap log_product_map(const ParameterSpace& parameters,
+                         const std::vector<EmulatorCalibrationOptions::LogProduct>& products);
+
 class Calibration {
  public:
   // `design` names the study, its parameters (priors), features and the model

@@ -279,6 +279,11 @@ void declare_calibration_keys(fem::ConfigSchema& s) {
   s.number("calibration.emulator.noise_pair_distance", "1", "1").default_value(shortest(emulator.noise_pair_distance))
       .range(Range{0.0, 0.5, false, false})
       .doc("Their distance in the unit cube.");
+  s.list("calibration.emulator.log_products").items(0, 100).default_value("[]")
+      .doc("Extra GP inputs: log10 of a product of parameters, scaled to [0, 1] (docs/CALIBRATION.md).");
+  s.string("calibration.emulator.log_products[].name").default_value("").doc("Its name; required.");
+  s.string("calibration.emulator.log_products[].parameters").default_value("")
+      .doc("Parameters joined by '*'; positive bounded priors.");
   s.boolean("calibration.emulator.focus").default_value(emulator.focus ? "true" : "false")
       .doc("Second emulators of the plausible runs (docs/CALIBRATION.md, 'Two routes').");
   s.number("calibration.emulator.focus_cutoff", "1", "1").default_value(shortest(emulator.focus_cutoff))
@@ -414,6 +419,33 @@ CalibrationSettings read_calibration_settings(const Study& study) {
   emulator.noise_pairs = c.integer("calibration.emulator.noise_pairs");
   emulator.noise_pair_distance = c.number("calibration.emulator.noise_pair_distance");
   emulator.gp.trend = trend_of(c.text("calibration.emulator.trend"));
+  const ParameterSpace& space = study.parameter_space();
+  for (int k = 0; k < c.n_items("calibration.emulator.log_products"); ++k) {
+    const std::string name_path = fem::item_path("calibration.emulator.log_products", k, "name");
+    const std::string parameters_path = fem::item_path("calibration.emulator.log_products", k, "parameters");
+    EmulatorCalibrationOptions::LogProduct product;
+    product.name = c.text(name_path);
+    if (!fem::is_plain_name(product.name)) c.fail(name_path, "a name is required (letters, digits and '_')");
+    std::string text = c.text(parameters_path) + "*";
+    for (std::size_t star = text.find('*'); star != std::string::npos; star = text.find('*')) {
+      const std::string parameter = fem::trim(text.substr(0, star));
+      text.erase(0, star + 1);
+      std::size_t index = space.n_parameters();
+      for (std::size_t i = 0; i < space.n_parameters(); ++i)
+        if (space.parameter(i).name == parameter) index = i;
+      std::string names;
+      for (std::size_t i = 0; i < space.n_parameters(); ++i) names += (i ? ", " : "") + space.parameter(i).name;
+      if (index == space.n_parameters())
+        c.fail(parameters_path, "'" + parameter + "' is not a parameter of the study; allowed: " + names +
+                                    ", joined by '*'");
+      const Prior& prior = space.parameter(index).prior;
+      if (!(prior.lower() > 0.0) || !std::isfinite(prior.upper()))
+        c.fail(parameters_path, "'" + parameter + "' needs a prior bounded above and with a positive lower bound");
+      product.parameters.push_back(index);
+    }
+    if (product.parameters.size() < 2) c.fail(parameters_path, "two or more parameters joined by '*'");
+    emulator.log_products.push_back(product);
+  }
   emulator.focus = c.boolean("calibration.emulator.focus");
   emulator.focus_cutoff = c.number("calibration.emulator.focus_cutoff");
   emulator.focus_training_cutoff = c.number("calibration.emulator.focus_training_cutoff");

@@ -251,7 +251,7 @@ EmulatorCalibrationResult EmulatorCalibration::run() const {
     gp.seed = options_.seed * 7919 + static_cast<std::uint64_t>(iteration) * 104729;
     it.n_noise_pairs = static_cast<int>(noise_pairs.size());
     emulator = FeatureEmulator(runs.point_matrix(), runs.feature_matrix(), gp, emulator ? &*emulator : nullptr, warping,
-                               noise_pairs, focus);
+                               noise_pairs, focus, options_.input_map);
     const FeatureEmulator& current = *emulator;
     it.n_focused = current.focused() != nullptr ? static_cast<int>(current.focused_rows().size()) : 0;
     const BatchLogDensity log_likelihood = [&](const Eigen::MatrixXd& points) {

@@ -95,6 +95,16 @@ struct EmulatorCalibrationOptions {
   // the emulators of all runs find a point plausible (within focus_cutoff), once
   // focus_min_runs runs are plausible (0: 2 d + 3, the diagonal quadratic trend's
   // 2 d + 1 terms and two more). false: the emulators of all runs only.
+  // Derived inputs of the GPs: log10 of a product of parameters each (their indices),
+  // scaled to [0, 1] over the prior box and appended to the unit-cube point; the
+  // calibration that knows the priors sets input_map from them (log_product_map in
+  // calibrate.hpp). Empty: the unit-cube points.
+  struct LogProduct {
+    std::string name;
+    std::vector<std::size_t> parameters;
+  };
+  std::vector<LogProduct> log_products;
+  InputMap input_map;
   bool focus = false;
   double focus_cutoff = 3.0;
   double focus_training_cutoff = 9.0;

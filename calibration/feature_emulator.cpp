@@ -13,8 +13,8 @@ namespace rsw::calibration {
 FeatureEmulator::FeatureEmulator(const Eigen::MatrixXd& inputs, const Eigen::MatrixXd& features,
                                  const GaussianProcessOptions& options, const FeatureEmulator* previous,
                                  FeatureWarping warping, const NoisePairs& pairs,
-                                 const std::optional<FeatureFocus>& focus)
-    : warping_(std::move(warping)) {
+                                 const std::optional<FeatureFocus>& focus, InputMap map)
+    : warping_(std::move(warping)), map_(std::move(map)) {
   if (inputs.rows() != features.rows())
     throw std::invalid_argument("FeatureEmulator: " + std::to_string(inputs.rows()) + " points but " +
                                 std::to_string(features.rows()) + " feature rows");
@@ -30,6 +30,7 @@ FeatureEmulator::FeatureEmulator(const Eigen::MatrixXd& inputs, const Eigen::Mat
   const bool warped = warping_.centre.size() > 0;
   if (warped && (warping_.centre.size() != p || warping_.width.size() != p || !(warping_.width.array() > 0.0).all()))
     throw std::invalid_argument("FeatureEmulator: a warping needs a centre and a positive width per feature");
+  const Eigen::MatrixXd gp_inputs = map_ ? map_(inputs) : inputs;
   offsets_.resize(p);
   scales_.resize(p);
   for (Eigen::Index j = 0; j < p; ++j) {
@@ -50,7 +51,7 @@ FeatureEmulator::FeatureEmulator(const Eigen::MatrixXd& inputs, const Eigen::Mat
       floor /= static_cast<double>(pairs.size());
       feature_options.nugget_floor_absolute = std::max(feature_options.nugget_floor_absolute, floor);
     }
-    GaussianProcessRegression regression(inputs, outputs, feature_options);
+    GaussianProcessRegression regression(gp_inputs, outputs, feature_options);
     if (previous != nullptr) {
       const GaussianProcess& before = previous->processes_[static_cast<std::size_t>(j)];
       GaussianProcessHyperparameters warm = before.hyperparameters();
@@ -94,7 +95,7 @@ FeatureEmulator::FeatureEmulator(const Eigen::MatrixXd& inputs, const Eigen::Mat
   }
   const FeatureEmulator* warm = previous != nullptr ? previous->focused() : nullptr;
   focused_ = std::make_shared<const FeatureEmulator>(focused_inputs, focused_features, options, warm, warping_,
-                                                     focused_pairs);
+                                                     focused_pairs, std::nullopt, map_);
   focused_rows_ = std::move(rows);
 }
 
@@ -151,6 +152,7 @@ FeaturePrediction FeatureEmulator::predict_global(const Eigen::MatrixXd& points)
   prediction.latent_variance.resize(m, p);
   prediction.noise_variance = global_noise_variances().transpose().replicate(m, 1);
   const bool warped = warping_.centre.size() > 0;
+  const Eigen::MatrixXd gp_points = map_ ? map_(points) : points;
   // Blocks of points on the process's threads; Eigen runs serially inside the region,
   // so each block is computed the same way whatever the thread count.
   constexpr Eigen::Index block = 128;
@@ -158,7 +160,7 @@ FeaturePrediction FeatureEmulator::predict_global(const Eigen::MatrixXd& points)
 #pragma omp parallel for schedule(dynamic) if (n_blocks > 1)
   for (Eigen::Index b = 0; b < n_blocks; ++b) {
     const Eigen::Index start = b * block, rows = std::min(block, m - start);
-    const Eigen::MatrixXd chunk = points.middleRows(start, rows);
+    const Eigen::MatrixXd chunk = gp_points.middleRows(start, rows);
     for (Eigen::Index j = 0; j < p; ++j) {
       const GaussianProcessPrediction one = processes_[static_cast<std::size_t>(j)].predict(chunk);
       const double scale = scales_(j);
@@ -182,11 +184,13 @@ FeatureEmulator FeatureEmulator::with_believed_point(const Eigen::VectorXd& x) c
   believed.offsets_ = offsets_;
   believed.scales_ = scales_;
   believed.warping_ = warping_;
+  believed.map_ = map_;
   believed.focus_ = focus_;
   believed.focused_rows_ = focused_rows_;
   if (focused_) believed.focused_ = std::make_shared<const FeatureEmulator>(focused_->with_believed_point(x));
+  const Eigen::VectorXd gx = map_ ? Eigen::VectorXd(map_(Eigen::MatrixXd(x.transpose())).row(0).transpose()) : x;
   for (const GaussianProcess& process : processes_) {
-    believed.processes_.push_back(process.with_added_point(x, process.predict(x).mean(0)));
+    believed.processes_.push_back(process.with_added_point(gx, process.predict(gx).mean(0)));
   }
   return believed;
 }

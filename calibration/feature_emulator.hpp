@@ -54,6 +54,7 @@
 
 #include <Eigen/Core>
 
+#include <functional>
 #include <memory>
 #include <optional>
 #include <utility>
@@ -82,6 +83,10 @@ struct FeatureWarping {
 // adds about δ² |∇y|²/(2d) to the bound, negligible for a small δ.
 using NoisePairs = std::vector<std::pair<Eigen::Index, Eigen::Index>>;
 
+// Inputs the GPs learn from the unit-cube points (m × d in, m × d' out), e.g. the points
+// with derived columns appended (calibrate.hpp, log products); empty: the points.
+using InputMap = std::function<Eigen::MatrixXd(const Eigen::MatrixXd&)>;
+
 // The focus above: the observed means Ȳ_j, their variances V_j/N, the two cutoffs and
 // the fewest plausible runs a focused emulator is fitted to.
 struct FeatureFocus {
@@ -99,7 +104,7 @@ class FeatureEmulator {
   // `focus`, if given, adds the focused emulator (Focusing above).
   FeatureEmulator(const Eigen::MatrixXd& inputs, const Eigen::MatrixXd& features, const GaussianProcessOptions& options,
                   const FeatureEmulator* previous = nullptr, FeatureWarping warping = {}, const NoisePairs& pairs = {},
-                  const std::optional<FeatureFocus>& focus = std::nullopt);
+                  const std::optional<FeatureFocus>& focus = std::nullopt, InputMap map = {});
 
   FeaturePrediction predict(const Eigen::MatrixXd& points) const;
   // The same hyperparameters conditioned on one more point at each feature's own mean
@@ -125,6 +130,7 @@ class FeatureEmulator {
   std::vector<GaussianProcess> processes_;
   Eigen::VectorXd offsets_, scales_;  // of the GP's outputs (z if warped)
   FeatureWarping warping_;
+  InputMap map_;
   std::optional<FeatureFocus> focus_;
   std::shared_ptr<const FeatureEmulator> focused_;
   std::vector<Eigen::Index> focused_rows_;

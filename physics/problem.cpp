@@ -199,11 +199,9 @@ void declare_contact(ConfigSchema& s) {
       .range(Range::closed(0, 200))
       .doc("Sheet/sheet points bond gradually as both sides approach their solidus: the "
            "bonding degree rises smoothly (C1) from 0 at this much below the solidus to 1 at "
-           "it and never falls; the film resistance fades with it, in series with the bonded "
-           "layer, and the mechanics tie takes the share of the traction it gives. 0 bonds a "
-           "point all at once when both sides reach the solidus, which makes the dynamic "
-           "resistance drop by up to 10 % in one step where a region bonds together and the "
-           "outputs jump between neighbouring parameter values.");
+           "it and never falls; the film resistance fades with it and the mechanics tie takes "
+           "its share of the traction. 0 bonds a point at once at the solidus, so R drops up "
+           "to 10 % in a step and outputs jump between neighbouring parameter values.");
 
   s.number("contact.bonding_gap", "m", "um").default_value("1 um")
       .range(Range::open_closed(0, 1000))
@@ -256,11 +254,9 @@ void declare_solver(ConfigSchema& s) {
   s.number("solver.early_time_step", "s", "ms").default_value("0.25 ms")
       .range(Range::closed(1e-6, 1))
       .doc("Largest time step from the weld start to solver.early_phase_end (not larger than "
-           "solver.time_step). The first tens of milliseconds (current ramp, contact "
-           "breakdown, melting onset) set the resistance features and carry the steepest "
-           "events: on the paper's mesh uniform 1 ms steps put R_beta 8 % above its value at "
-           "0.25 ms, and a 0.25 ms early phase to 20 ms gives the uniform 0.25 ms value and "
-           "makes T_max smooth in P1 (docs/VERIFICATION.md, 'Time-step error').");
+           "solver.time_step). The first tens of milliseconds set the resistance features: "
+           "uniform 1 ms steps put R_beta 8 % above its 0.25 ms value on the paper's mesh; "
+           "0.25 ms to 20 ms matches it (docs/VERIFICATION.md, 'Time-step error').");
   s.number("solver.early_phase_end", "s", "ms").default_value("20 ms")
       .range(Range::closed(0, 10000))
       .doc("End of the early phase measured from the weld start (itself a step); 0: no early "
@@ -280,9 +276,8 @@ void declare_solver(ConfigSchema& s) {
   s.number("solver.friction_penalty_ratio", "1", "1").default_value("0.1")
       .range(Range::closed(1e-3, 10))
       .doc("Stick stiffness of the regularised Coulomb friction relative to the normal penalty: "
-           "eps_T = ratio * eps_N. A contact point slides once its elastic slip reaches about mu p / eps_T "
-           "(40 nm at 150 MPa of friction stress on the paper's mesh with 0.1). Stiffer sticking (1) gives the "
-           "same welds to 0.2 % with a third more Newton iterations (docs/PERFORMANCE.md).");
+           "eps_T = ratio * eps_N; a point slides once its elastic slip reaches about mu p / eps_T "
+           "(docs/MECHANICS.md).");
   s.choice("solver.sheet_contact", {"two_pass", "one_pass"}).default_value("two_pass")
       .doc("Treatment of the sheet/sheet contacts: one_pass keeps the upper sheet's points out of the "
            "lower sheet (slave and master); two_pass adds the mirrored pass, each with half the area, so "
@@ -321,10 +316,9 @@ void declare_solver(ConfigSchema& s) {
            "displacement error |du_k|^2/|du_k-1| is below this, with the out-of-balance force within "
            "100 times its tolerance (0: off). 1 nm is a thousandth of the contact smoothing width.");
   s.choice("solver.electrode_melting", {"continue", "stop"}).default_value("continue")
-      .doc("When an electrode node first reaches the solidus of its material (the electrode face "
-           "melts: sticking, outside what the model represents): continue records a warning with "
-           "the time, place and temperature in summary.json and results.h5 and goes on (outputs "
-           "stay continuous in the parameters, which calibration needs); stop fails the run there.");
+      .doc("When an electrode first reaches its solidus (melting: outside the model): continue "
+           "warns (time, place, temperature in summary.json and results.h5) and goes on, outputs "
+           "staying continuous in the parameters; stop fails the run there.");
   s.integer("solver.max_cells").default_value("100000")
       .range(Range::closed(1, 1e9))
       .doc("Refuse a mesh of more cells (estimated; a run needs 35 MB + 21 kB per cell). The paper's has 7700.");
@@ -340,10 +334,9 @@ void declare_output(ConfigSchema& s) {
   s.number("output.interval", "s", "ms").default_value("0 ms")
       .range(Range::closed(0, 10000))
       .doc("Time between output steps: a row of the signals (signals.csv, results.h5) at each; "
-           "0 = a row at every time step. Every output time is also a time step. The signal "
-           "features average the signals over the cells of a 1 ms grid (calibration/features.hpp): "
-           "with a row at every step a fast resistance drop moves them continuously as the "
-           "parameters move it, where 1 ms rows make them jump (docs/MODEL.md).");
+           "0 = a row at every time step. Every output time is also a time step. The features "
+           "average the rows over 1 ms cells: rows at every step keep them continuous in the "
+           "parameters (docs/MODEL.md).");
   s.number("output.field_interval", "s", "ms").default_value("5 ms")
       .range(Range::open_closed(0, 10000))
       .doc("Least time between field outputs (.vtu files for ParaView): fields are written at the "

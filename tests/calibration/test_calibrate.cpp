@@ -485,6 +485,31 @@ TEST(CalibrationStudy, ObservedSignalWithAnUndefinedFeatureIsAnErrorWithTheReaso
   fs::remove_all(dir);
 }
 
+// Film thickness t log10-uniform on [1e-7, 5e-4] m (3.699 decades), resistivity rho on
+// [5e-7, 5e-5] ohm m (2 decades), a uniform third parameter c on [1, 3]. The log product
+// z = (log10 t + log10 rho - log10(5e-14)) / log10(2.5e-8 / 5e-14) is linear in u for
+// log10-uniform priors: z = (3.699 u_t + 2 u_rho) / 5.699; for t * c it is not.
+TEST(Calibrate, LogProductsAppendTheScaledLogOfEachProductToThePoint) {
+  ParameterSpace space;
+  space.add(Parameter{"t", "test.t", "m", Prior::log10_uniform(1e-7, 5e-4)});
+  space.add(Parameter{"rho", "test.rho", "ohm*m", Prior::log10_uniform(5e-7, 5e-5)});
+  space.add(Parameter{"c", "test.c", "1", Prior::uniform(1.0, 3.0)});
+  const InputMap map = log_product_map(space, {{"r", {0, 1}}, {"tc", {0, 2}}});
+  Eigen::MatrixXd points(3, 3);
+  points << 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 0.3, 0.8, 0.5;
+  const Eigen::MatrixXd mapped = map(points);
+  ASSERT_EQ(mapped.rows(), 3);
+  ASSERT_EQ(mapped.cols(), 5);
+  EXPECT_EQ(mapped.leftCols(3), points);
+  const double decades_t = std::log10(5e-4 / 1e-7), decades_rho = 2.0;
+  EXPECT_NEAR(mapped(0, 3), 0.0, 1e-12);
+  EXPECT_NEAR(mapped(1, 3), 1.0, 1e-12);
+  EXPECT_NEAR(mapped(2, 3), (decades_t * 0.3 + decades_rho * 0.8) / (decades_t + decades_rho), 1e-12);
+  // t * c at u = (0.3, -, 0.5): t = 1e-7 * 10^(0.3 decades_t), c = 2.
+  const double low = std::log10(1e-7 * 1.0), high = std::log10(5e-4 * 3.0);
+  EXPECT_NEAR(mapped(2, 4), (std::log10(1e-7 * std::pow(10.0, 0.3 * decades_t) * 2.0) - low) / (high - low), 1e-12);
+}
+
 TEST(Calibrate, UnitPointsMapThroughThePriorsAndStayFinite) {
   ParameterSpace space;
   space.add(Parameter{"a", "test.a", "1", Prior::log10_uniform(1e-3, 1e-1)});

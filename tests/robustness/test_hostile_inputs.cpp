@@ -228,6 +228,14 @@ std::vector<HostileInput> hostile_inputs() {
               "calibration:\n  method: emulator\n  observations:\n    features_file: features.csv\n  emulator:\n"
               "    max_evaluations: 5\n",
               {"study.yaml", "max_evaluations"});
+  calibration("LogProductOfAnUnknownParameter",
+              "calibration:\n  method: emulator\n  observations:\n    features_file: features.csv\n  emulator:\n"
+              "    log_products: [{name: r, parameters: htc_p1 * htc_p2}]\n",
+              {"study.yaml", "htc_p2", "htc_p1"});
+  calibration("LogProductOfOneParameter",
+              "calibration:\n  method: emulator\n  observations:\n    features_file: features.csv\n  emulator:\n"
+              "    log_products: [{name: r, parameters: htc_p1}]\n",
+              {"study.yaml", "two or more"});
   return c;
 }
 
