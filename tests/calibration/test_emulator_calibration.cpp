@@ -88,6 +88,18 @@ struct LinearProblem {
     return GaussianLikelihood(names, y.transpose(), ObservationNoise::given(sds));
   }
 
+  // The weighted pool's mean and sd of each u_i within 0.1 posterior sd of the closed form.
+  void expect_posterior_moments(const EmulatorCalibrationResult& result) const {
+    Eigen::VectorXd weights = (result.pool_log_likelihood + result.pool_log_weight).array().exp().matrix();
+    weights /= weights.sum();
+    const Eigen::VectorXd mean = result.pool.transpose() * weights;
+    for (int j = 0; j < d; ++j) {
+      const double variance = (result.pool.col(j).array() - mean(j)).square().matrix().dot(weights);
+      EXPECT_NEAR(mean(j), mode(j), 0.1 * posterior_sd(j)) << "parameter " << j;
+      EXPECT_NEAR(std::sqrt(variance), posterior_sd(j), 0.1 * posterior_sd(j)) << "parameter " << j;
+    }
+  }
+
   BatchFeatureFunction model() const {
     return [this](const std::vector<Eigen::VectorXd>& points) {
       std::vector<std::optional<Eigen::VectorXd>> values;
@@ -123,14 +135,7 @@ TEST(EmulatorCalibration, RecoversTheClosedFormPosteriorAndEvidenceOfALinearMode
     ASSERT_EQ(it.parameter_influence.size(), problem.d);
     EXPECT_EQ(it.parameter_influence.maxCoeff(), it.emulator_influence);
   }
-  Eigen::VectorXd weights = (result.pool_log_likelihood + result.pool_log_weight).array().exp().matrix();
-  weights /= weights.sum();
-  const Eigen::VectorXd mean = result.pool.transpose() * weights;
-  for (int j = 0; j < problem.d; ++j) {
-    const double variance = (result.pool.col(j).array() - mean(j)).square().matrix().dot(weights);
-    EXPECT_NEAR(mean(j), problem.mode(j), 0.1 * problem.posterior_sd(j)) << "parameter " << j;
-    EXPECT_NEAR(std::sqrt(variance), problem.posterior_sd(j), 0.1 * problem.posterior_sd(j)) << "parameter " << j;
-  }
+  problem.expect_posterior_moments(result);
 }
 
 
@@ -225,14 +230,7 @@ TEST(EmulatorCalibration, FocusKeepsTheClosedFormPosteriorOfALinearModelWithAFar
   EXPECT_GT(result.history.back().n_focused, 0);
   EXPECT_GT(result.history.back().focused_weight, 0.95);
   EXPECT_NEAR(result.log_evidence, problem.log_evidence, std::log(1.05));
-  Eigen::VectorXd weights = (result.pool_log_likelihood + result.pool_log_weight).array().exp().matrix();
-  weights /= weights.sum();
-  const Eigen::VectorXd mean = result.pool.transpose() * weights;
-  for (int j = 0; j < problem.d; ++j) {
-    const double variance = (result.pool.col(j).array() - mean(j)).square().matrix().dot(weights);
-    EXPECT_NEAR(mean(j), problem.mode(j), 0.1 * problem.posterior_sd(j)) << "parameter " << j;
-    EXPECT_NEAR(std::sqrt(variance), problem.posterior_sd(j), 0.1 * problem.posterior_sd(j)) << "parameter " << j;
-  }
+  problem.expect_posterior_moments(result);
 }
 
 
