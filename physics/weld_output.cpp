@@ -9,6 +9,7 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <set>
 
 #include "rsw_git_commit.hpp"
 
@@ -58,26 +59,63 @@ void WeldFieldWriter::write_if_due(double t, const fem::Mesh& mesh, const Mechan
   fields.add_cell_scalar("equivalent_plastic_strain", mech.equivalent_plastic_strain(), "1");
   const auto& pairings = mech.pairings();
   const auto& htc = thermal.interface_conductance();
+  std::set<std::string> slave_sides;
+  for (const auto& pairing : pairings) slave_sides.insert(pairing.slave_boundary());
   for (std::size_t p = 0; p < pairings.size(); ++p) {
     const auto pressure = mech.contact_pressure(static_cast<int>(p));
+    const auto& points = pairings[p].points();
     const int n_g = pairings[p].n_gauss();
     const int n_f = pairings[p].n_slave_faces();
+    // Per contact point: pressure, gap (NaN where unpaired), the two conductances.
+    const auto n_points = points.size();
+    std::vector<double> point_he(n_points, 0.0), point_htc(n_points, 0.0);
+    for (std::size_t i = 0; i < n_points; ++i) {
+      if (have_electrical && p < electrical.solution().interface_conductance.size())
+        point_he[i] = electrical.solution().interface_conductance[p][i];
+      if (p < htc.size() && i < htc[p].size()) point_htc[i] = htc[p][i];
+    }
     std::vector<double> face_p(n_f, 0.0), face_g(n_f, 0.0), face_he(n_f, 0.0), face_htc(n_f, 0.0);
     for (int f = 0; f < n_f; ++f)
       for (int k = 0; k < n_g; ++k) {
         const int i = f * n_g + k;
-        const auto& pt = pairings[p].points()[i];
         face_p[f] += pressure[i] / n_g;
-        face_g[f] += (pt.paired ? pt.gap : std::nan("")) / n_g;
-        if (have_electrical && p < electrical.solution().interface_conductance.size())
-          face_he[f] += electrical.solution().interface_conductance[p][i] / n_g;
-        if (p < htc.size() && i < static_cast<int>(htc[p].size())) face_htc[f] += htc[p][i] / n_g;
+        face_g[f] += (points[i].paired ? points[i].gap : std::nan("")) / n_g;
+        face_he[f] += point_he[i] / n_g;
+        face_htc[f] += point_htc[i] / n_g;
       }
     const std::string& b = pairings[p].slave_boundary();
     fields.add_face_scalar("contact_pressure", b, face_p, "Pa");
     fields.add_face_scalar("contact_gap", b, face_g, "m");
     fields.add_face_scalar("electrical_conductance", b, face_he, "S/m^2");
     fields.add_face_scalar("thermal_conductance", b, face_htc, "W/(m^2*K)");
+    // The master side, unless another pairing has it as its slave side (two-pass
+    // contact): each face the area-weighted mean of the paired points projected onto it;
+    // a face no point projects onto has no contact (0) and no gap (NaN).
+    const std::string& m = pairings[p].master_boundary();
+    if (slave_sides.count(m)) continue;
+    const std::size_t n_m = mesh.boundary(m).size();
+    std::vector<double> area(n_m, 0.0), m_p(n_m, 0.0), m_g(n_m, 0.0), m_he(n_m, 0.0), m_htc(n_m, 0.0);
+    for (std::size_t i = 0; i < n_points; ++i) {
+      const auto& pt = points[i];
+      if (!pt.paired || pt.master_face < 0 || static_cast<std::size_t>(pt.master_face) >= n_m) continue;
+      const auto f = static_cast<std::size_t>(pt.master_face);
+      area[f] += pt.area;
+      m_p[f] += pt.area * pressure[i];
+      m_g[f] += pt.area * pt.gap;
+      m_he[f] += pt.area * point_he[i];
+      m_htc[f] += pt.area * point_htc[i];
+    }
+    for (std::size_t f = 0; f < n_m; ++f) {
+      const double a = area[f];
+      m_p[f] = a > 0.0 ? m_p[f] / a : 0.0;
+      m_g[f] = a > 0.0 ? m_g[f] / a : std::nan("");
+      m_he[f] = a > 0.0 ? m_he[f] / a : 0.0;
+      m_htc[f] = a > 0.0 ? m_htc[f] / a : 0.0;
+    }
+    fields.add_face_scalar("contact_pressure", m, m_p, "Pa");
+    fields.add_face_scalar("contact_gap", m, m_g, "m");
+    fields.add_face_scalar("electrical_conductance", m, m_he, "S/m^2");
+    fields.add_face_scalar("thermal_conductance", m, m_htc, "W/(m^2*K)");
   }
   series_.write_step(t, mesh, fields);
 }

@@ -15,6 +15,7 @@
 #include <fstream>
 #include <memory>
 #include <regex>
+#include <set>
 #include <sstream>
 #include <string>
 
@@ -146,6 +147,18 @@ TEST(RswSimulate, SqueezeRunWritesReadableResultsAndFields) {
   const auto last = rsw::fem::read_vtm(steps.back().file);
   EXPECT_GT(last.block("sheet_1").point_array("displacement").n_tuples(), 0);
   EXPECT_GT(last.block("sheet_1").cell_array("von_mises_stress").n_tuples(), 0);
+  // Contact quantities on both sides of each interface: under 3 kN every contact face,
+  // the electrodes' and both sheets' (top and bottom), carries pressure.
+  for (const char* block : {"upper_electrode_boundaries", "sheet_1_boundaries", "sheet_2_boundaries",
+                            "lower_electrode_boundaries"}) {
+    const auto& boundary = last.block(block);
+    const auto& names = boundary.strings("boundary_names");
+    const auto& pressure = boundary.cell_array("contact_pressure");
+    std::set<std::string> pressed;
+    for (int k = 0; k < boundary.n_cells; ++k)
+      if (pressure.at(k) > 1e6) pressed.insert(names[static_cast<std::size_t>(boundary.cell_array("boundary_id").at(k))]);
+    EXPECT_EQ(pressed.size(), std::string(block).rfind("sheet", 0) == 0 ? 2u : 1u) << block;
+  }
   const auto& units = last.block("sheet_1").strings("units");
   for (const char* entry : {"displacement [m]", "temperature [degC]", "von_mises_stress [Pa]", "joule_heat [W/m^3]"})
     EXPECT_NE(std::find(units.begin(), units.end(), entry), units.end()) << entry;
