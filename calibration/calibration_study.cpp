@@ -177,7 +177,7 @@ void declare_calibration_keys(fem::ConfigSchema& s) {
   s.string(std::string(noise_standard_deviations) + "[].value").default_value("")
       .doc("Its measurement standard deviation, e.g. '2 uohm' (a bare number is in the feature's SI unit), > 0.");
   s.list(noise_discrepancy).items(0, 1000).default_value("[]")
-      .doc("Fixed model-discrepancy spread delta_j added to Sigma (Kennedy & O'Hagan 2001); 0 for features not listed.");
+      .doc("Model-discrepancy spread delta_j, shared by all replicates; 0 if not listed.");
   s.string(std::string(noise_discrepancy) + "[].feature").default_value("")
       .doc("A feature of the study; required.");
   s.string(std::string(noise_discrepancy) + "[].standard_deviation").default_value("")

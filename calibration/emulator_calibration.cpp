@@ -73,7 +73,7 @@ std::vector<Eigen::VectorXd> rows_of(const Eigen::MatrixXd& matrix) {
   return rows;
 }
 
-// a(u) = Σ_j s_j²(u) / (V_j/N + τ_j²) at each point.
+// a(u) = Σ_j s_j²(u) / (v_j + τ_j²) at each point.
 Eigen::VectorXd acquisition(const FeatureEmulator& emulator, const Eigen::MatrixXd& points,
                             const Eigen::VectorXd& irreducible) {
   const FeaturePrediction prediction = emulator.predict(points);

@@ -26,11 +26,11 @@
 //      and the importance pool's effective sample size at least
 //      max(min_pool_ess, min_pool_ess_fraction · pool_size), so that the figures rest on
 //      enough points (the same guard as SBALC's). Reported beside them, not a check: the
-//      variance ratio r_j = E_π̃[s_j²(u)] / (V_j/N + τ_j²) of each feature, the emulator's
+//      variance ratio r_j = E_π̃[s_j²(u)] / (v_j + τ_j²) of each feature, the emulator's
 //      own variance over the posterior against the variance no run removes (the data's
-//      mean, V_j/N, and the model's noise τ_j²);
+//      mean, v_j, and the model's noise τ_j²);
 //   4. otherwise choose batch_size new points among the SMC particles (draws of π̃), each
-//      maximising a(u) = Σ_j s_j²(u) / (V_j/N + τ_j²) of emulators conditioned on the
+//      maximising a(u) = Σ_j s_j²(u) / (v_j + τ_j²) of emulators conditioned on the
 //      points chosen before it at their own means (kriging believer: the variance shrinks
 //      there, the mean stays), run them and go to 1.
 // The initial design is a maximin Latin hypercube of n_initial points (default 10 d,
@@ -41,7 +41,7 @@
 // noise at scales no design resolves) gets a nugget of at least the variance its
 // near-duplicate runs show, instead of an interpolating GP that stays uncertain.
 // Warnings (with what to do) name: a stop without convergence and the check that
-// failed, a feature whose numerical noise τ_j exceeds the data's standard error √(V_j/N)
+// failed, a feature whose numerical noise τ_j exceeds the data's standard error √(v_j)
 // (the posterior then shows the model's noise, and is wider than the data alone allow),
 // a pool whose effective sample size is below the threshold, failed runs.
 // Deterministic for a fixed seed.
@@ -81,7 +81,7 @@ struct EmulatorCalibrationOptions {
   double min_pool_ess_fraction = 0.01;
   TemperedSmcOptions smc;          // its seed is replaced by one derived from `seed`
   GaussianProcessOptions gp = default_gp();  // per feature
-  // Each feature's GP learns asinh((y − Ȳ_j)/w_j), w_j = warping_width · √(V_j/N)
+  // Each feature's GP learns asinh((y − Ȳ_j)/w_j), w_j = warping_width · √(v_j)
   // (feature_emulator.hpp, "Warping"); 0: the features themselves.
   double warping_width = 0.0;
   // After the initial design, this many near-duplicates of the best runs so far (by the

@@ -196,17 +196,14 @@ FeatureEmulator FeatureEmulator::with_believed_point(const Eigen::VectorXd& x) c
 }
 
 EmulatedLikelihood::EmulatedLikelihood(const GaussianLikelihood& likelihood) {
-  const Eigen::MatrixXd& y = likelihood.observations();
-  const Eigen::VectorXd& variances = likelihood.variances();
-  const auto n = static_cast<double>(y.rows());
-  observed_mean_ = y.colwise().mean().transpose();
-  mean_variances_ = variances / n;
-  constant_ = 0.0;
-  for (Eigen::Index j = 0; j < y.cols(); ++j) {
-    const double scatter = (y.col(j).array() - observed_mean_(j)).square().sum();
-    constant_ += -0.5 * scatter / variances(j) - 0.5 * (n - 1.0) * std::log(2.0 * M_PI * variances(j)) -
-                 0.5 * std::log(n);
-  }
+  // ln L of likelihood.hpp with the replicate mean's variance v_j widened by the
+  // emulator's; its θ-free terms are the likelihood's less the ½ ln(2π N v_j) that the
+  // widened variance replaces.
+  observed_mean_ = likelihood.observations().colwise().mean().transpose();
+  mean_variances_ = likelihood.mean_variances();
+  const auto n = static_cast<double>(likelihood.n_replicates());
+  constant_ = likelihood.log_normalisation() + 0.5 * (2.0 * M_PI * n * mean_variances_.array()).log().sum() -
+              0.5 * static_cast<double>(mean_variances_.size()) * std::log(n);
 }
 
 Eigen::VectorXd EmulatedLikelihood::log_likelihood(const FeaturePrediction& prediction) const {

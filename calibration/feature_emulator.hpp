@@ -10,13 +10,14 @@
 // tens of per cent over the prior, while ℒ falls by thousands of units.
 //
 // The likelihood of the observations Y^(k)_j (k = 1 … N replicates, GaussianLikelihood:
-// variances V_j = σ_j² + δ_j² per replicate) when the model's feature is
-// M_j(u) = m_j(u) + e_j, e_j ~ N(0, s_j²(u) + τ_j²) shared by all replicates (one model
-// value per θ), is for each feature the Gaussian N(Y_j; M_j 1, V_j I + (s_j² + τ_j²) 11ᵀ),
-// whose determinant and inverse give, with Ȳ_j the replicates' mean and
-// S_j = Σ_k (Y^(k)_j − Ȳ_j)²,
-//     ln L̃(u) = Σ_j [ −S_j/(2V_j) − ((N − 1)/2) ln(2π V_j) − ½ ln N
-//                    − (Ȳ_j − m_j)²/(2 W_j) − ½ ln(2π W_j) ],   W_j = V_j/N + s_j² + τ_j².
+// measurement variance σ_j² per replicate, a discrepancy δ_j² shared by all) when the
+// model's feature is M_j(u) = m_j(u) + e_j, e_j ~ N(0, s_j²(u) + τ_j²) also shared (one
+// model value per θ), is for each feature the Gaussian
+// N(Y_j; m_j 1, σ_j² I + (δ_j² + s_j² + τ_j²) 11ᵀ), whose determinant and inverse give,
+// with Ȳ_j the replicates' mean, S_j = Σ_k (Y^(k)_j − Ȳ_j)² and v_j = σ_j²/N + δ_j² the
+// variance of the replicates' mean,
+//     ln L̃(u) = Σ_j [ −S_j/(2σ_j²) − ((N − 1)/2) ln(2π σ_j²) − ½ ln N
+//                    − (Ȳ_j − m_j)²/(2 W_j) − ½ ln(2π W_j) ],   W_j = v_j + s_j² + τ_j².
 // With s_j = τ_j = 0 this is GaussianLikelihood::log_likelihood at M = m exactly, so the
 // route estimates the same posterior and evidence as SBALC where the emulator is exact;
 // elsewhere the emulator's uncertainty widens the likelihood instead of biasing it
@@ -39,10 +40,10 @@
 // signal variance and length scales set by the far corners; where the posterior lives
 // it stays uncertain. With a focus, a second emulator learns only the plausible runs,
 // those whose features all lie within training_cutoff data standard errors:
-//     I_r = max_j |y_rj − Ȳ_j| / √(V_j/N + τ_j²) ≤ training_cutoff   (τ_j of the global fit),
+//     I_r = max_j |y_rj − Ȳ_j| / √(v_j + τ_j²) ≤ training_cutoff   (τ_j of the global fit),
 // and at a point u the prediction is the focused one where the global emulator finds
 // u plausible,
-//     I(u) = max_j |Ȳ_j − m_j(u)| / √(V_j/N + s_j²(u) + τ_j²) ≤ cutoff   (3: Pukelsheim's
+//     I(u) = max_j |Ȳ_j − m_j(u)| / √(v_j + s_j²(u) + τ_j²) ≤ cutoff   (3: Pukelsheim's
 // three-sigma rule, as Vernon et al.), the global one elsewhere. The training cutoff
 // is wider than the cutoff, so the focused emulator has runs beyond the border where it
 // is used. Fewer than min_runs plausible runs, or all of them: no focused emulator.
@@ -87,7 +88,7 @@ using NoisePairs = std::vector<std::pair<Eigen::Index, Eigen::Index>>;
 // with derived columns appended (calibrate.hpp, log products); empty: the points.
 using InputMap = std::function<Eigen::MatrixXd(const Eigen::MatrixXd&)>;
 
-// The focus above: the observed means Ȳ_j, their variances V_j/N, the two cutoffs and
+// The focus above: the observed means Ȳ_j, their variances v_j, the two cutoffs and
 // the fewest plausible runs a focused emulator is fitted to.
 struct FeatureFocus {
   Eigen::VectorXd observed_mean, mean_variances;
@@ -143,12 +144,12 @@ class EmulatedLikelihood {
 
   // ln L̃ at each point of a prediction (m values).
   Eigen::VectorXd log_likelihood(const FeaturePrediction& prediction) const;
-  // V_j / N, the variance of the replicates' mean under the noise model.
+  // v_j = σ_j²/N + δ_j², the variance of the replicates' mean under the noise model.
   const Eigen::VectorXd& mean_variances() const { return mean_variances_; }
 
  private:
   Eigen::VectorXd observed_mean_, mean_variances_;
-  double constant_ = 0.0;  // Σ_j [−S_j/(2V_j) − ((N − 1)/2) ln(2π V_j) − ½ ln N]
+  double constant_ = 0.0;  // Σ_j [−S_j/(2σ_j²) − ((N − 1)/2) ln(2π σ_j²) − ½ ln N]
 };
 
 }  // namespace rsw::calibration

@@ -71,6 +71,7 @@ GaussianLikelihood::GaussianLikelihood(std::vector<std::string> feature_names, E
 
   const double n_obs = static_cast<double>(observations_.rows());
   measurement_variances_.resize(p);
+  discrepancy_variances_.resize(p);
   variances_.resize(p);
   for (Eigen::Index j = 0; j < p; ++j) {
     const std::string& name = feature_names_[j];
@@ -100,12 +101,31 @@ GaussianLikelihood::GaussianLikelihood(std::vector<std::string> feature_names, E
       throw std::invalid_argument("GaussianLikelihood: discrepancy variance of feature '" + name +
                                   "' must be finite and >= 0, got " + std::to_string(delta2));
     measurement_variances_(j) = sd * sd;
+    discrepancy_variances_(j) = delta2;
     variances_(j) = sd * sd + delta2;
     if (!(variances_(j) > 0.0) || !std::isfinite(variances_(j)))
       throw std::invalid_argument("GaussianLikelihood: variance of feature '" + name + "' must be finite and > 0, got " +
                                   std::to_string(variances_(j)));
+    if (observations_.rows() > 1 && !(measurement_variances_(j) > 0.0))
+      throw std::invalid_argument("GaussianLikelihood: the measurement standard deviation of feature '" + name +
+                                  "' is 0, but its " + std::to_string(observations_.rows()) +
+                                  " replicates need a positive one (a discrepancy is shared by all replicates)");
   }
-  log_normalisation_ = -0.5 * n_obs * (static_cast<double>(p) * kLogTwoPi + variances_.array().log().sum());
+  observed_mean_ = observations_.colwise().mean().transpose();
+  const Eigen::VectorXd v = mean_variances();
+  log_normalisation_ = 0.0;
+  for (Eigen::Index j = 0; j < p; ++j) {
+    if (observations_.rows() > 1) {
+      const double scatter = (observations_.col(j).array() - observed_mean_(j)).square().sum();
+      log_normalisation_ += -0.5 * scatter / measurement_variances_(j) -
+                            0.5 * (n_obs - 1.0) * (kLogTwoPi + std::log(measurement_variances_(j)));
+    }
+    log_normalisation_ += -0.5 * (kLogTwoPi + std::log(n_obs * v(j)));
+  }
+}
+
+Eigen::VectorXd GaussianLikelihood::mean_variances() const {
+  return measurement_variances_ / static_cast<double>(observations_.rows()) + discrepancy_variances_;
 }
 
 double GaussianLikelihood::log_likelihood(const Eigen::VectorXd& model_features) const {
@@ -119,9 +139,8 @@ double GaussianLikelihood::log_likelihood(const Eigen::VectorXd& model_features)
     if (!std::isfinite(model_features(j)))
       throw std::invalid_argument("GaussianLikelihood: non-finite model value of feature '" + feature_names_[j] + "'");
   }
-  const Eigen::MatrixXd residuals = observations_.rowwise() - model_features.transpose();
-  const double quadratic = (residuals.array().square().rowwise() / variances_.transpose().array()).sum();
-  return -0.5 * quadratic + log_normalisation_;
+  const Eigen::ArrayXd residuals = observed_mean_ - model_features;
+  return -0.5 * (residuals.square() / mean_variances().array()).sum() + log_normalisation_;
 }
 
 double GaussianLikelihood::log_likelihood(const std::vector<std::string>& names, const Eigen::VectorXd& values) const {
