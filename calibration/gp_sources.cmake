@@ -3,7 +3,7 @@
 #   target_sources / add_library(... ${RSW_CALIBRATION_GP_SOURCES})
 #   target_link_libraries(rsw_calibration PUBLIC ... ${RSW_CALIBRATION_GP_LIBS})
 # NLopt stays behind calibration/optimizer.cpp; nothing else includes nlopt.hpp.
-find_package(NLopt REQUIRED)
+# NLopt itself is found by tools/rsw_dependencies.cmake (top-level CMakeLists.txt).
 # Debian ships two configurations of the same C API: NLopt::nlopt and NLopt::nlopt_cxx;
 # find_package may pick either.
 if(TARGET NLopt::nlopt)

@@ -300,15 +300,22 @@ std::vector<std::string>& user_directories() {
   static std::vector<std::string> directories;
   return directories;
 }
+
+std::string& shipped_directory() {
+  static std::string directory = RSW_MATERIALS_DIR;
+  return directory;
+}
 }  // namespace
 
 void MaterialLibrary::set_user_directories(std::vector<std::string> directories) {
   user_directories() = std::move(directories);
 }
 
+void MaterialLibrary::set_shipped_directory(std::string directory) { shipped_directory() = std::move(directory); }
+
 std::vector<std::string> MaterialLibrary::default_directories() {
   std::vector<std::string> directories = user_directories();
-  directories.emplace_back(RSW_MATERIALS_DIR);
+  directories.push_back(shipped_directory());
   return directories;
 }
 

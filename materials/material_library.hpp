@@ -15,9 +15,11 @@
 // MaterialLibrary searches a list of directories in order for <name>.yaml. The
 // default list is the user directories set by the program (the `rsw` program takes
 // them from the environment variable RSW_MATERIALS_PATH, separated by ':'; the
-// library reads no environment), followed by the source tree's materials/data
-// (compile definition RSW_MATERIALS_DIR), so a user directory can add grades or
-// shadow the shipped ones.
+// library reads no environment), followed by the shipped data directory: the source
+// tree's materials/data (compile definition RSW_MATERIALS_DIR) unless the program names
+// another (set_shipped_directory: an installed rsw's <prefix>/share/rsw/materials, the
+// CMake package's rsw_MATERIALS_DIR), so a user directory can add grades or shadow the
+// shipped ones.
 #pragma once
 
 #include "fem/config.hpp"
@@ -54,6 +56,8 @@ class MaterialLibrary {
   // Directories searched before the shipped data by every default-constructed
   // library of this process.
   static void set_user_directories(std::vector<std::string> directories);
+  // The shipped data directory of every default-constructed library of this process.
+  static void set_shipped_directory(std::string directory);
 
   const std::vector<std::string>& directories() const { return directories_; }
   // Names of the materials found (file stems of *.yaml), sorted, each once.

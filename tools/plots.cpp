@@ -1,6 +1,8 @@
 // Plot scripts run from rsw commands (see plots.hpp).
 #include "tools/plots.hpp"
 
+#include "tools/shipped_files.hpp"
+
 #include <array>
 #include <cstdio>
 #include <cstdlib>
@@ -8,9 +10,6 @@
 #include <memory>
 #include <sys/wait.h>
 
-#ifndef RSW_TOOLS_DIR
-#error "RSW_TOOLS_DIR must name the folder of the plot scripts (tools/CMakeLists.txt)"
-#endif
 
 namespace rsw::tools {
 namespace {
@@ -27,7 +26,7 @@ std::string quoted(const std::string& text) {
 bool run_plot_script(const std::string& script, const std::vector<std::string>& arguments) {
   const char* env = std::getenv("RSW_PYTHON");
   const std::string python = env != nullptr && *env != '\0' ? env : "/usr/bin/python3";
-  std::string command = quoted(python) + " " + quoted((std::filesystem::path(RSW_TOOLS_DIR) / script).string());
+  std::string command = quoted(python) + " " + quoted((plot_scripts_dir() / script).string());
   for (const auto& a : arguments) command += " " + quoted(a);
   std::string output;
   int status = -1;

@@ -16,6 +16,7 @@
 #include "tools/config_commands.hpp"
 #include "tools/calibrate_command.hpp"
 #include "tools/mesh_command.hpp"
+#include "tools/shipped_files.hpp"
 #include "tools/simulate_command.hpp"
 #include "tools/study_commands.hpp"
 #include "tools/weld_model.hpp"
@@ -53,6 +54,7 @@ int main(int argc, char** argv) {
       rsw::fem::use_threads(omp_get_max_threads());
   });
   // User material directories before the shipped data (materials/data/README.md).
+  rsw::materials::MaterialLibrary::set_shipped_directory(rsw::tools::shipped_materials_dir().string());
   if (const char* path = std::getenv("RSW_MATERIALS_PATH"); path != nullptr)
     rsw::materials::MaterialLibrary::set_user_directories(rsw::materials::split_path_list(path));
   rsw::tools::add_mesh_command(app);

@@ -12,9 +12,11 @@ add_executable(rsw_analytic
   ${CMAKE_CURRENT_LIST_DIR}/analytic_rsw_main.cpp
   ${PROJECT_SOURCE_DIR}/tools/study_commands.cpp
   ${PROJECT_SOURCE_DIR}/tools/calibrate_command.cpp
-  ${PROJECT_SOURCE_DIR}/tools/plots.cpp)
+  ${PROJECT_SOURCE_DIR}/tools/plots.cpp
+  ${PROJECT_SOURCE_DIR}/tools/shipped_files.cpp)
 target_link_libraries(rsw_analytic PRIVATE rsw_calibration rsw_fem CLI11::CLI11)
-target_compile_definitions(rsw_analytic PRIVATE RSW_TOOLS_DIR="${PROJECT_SOURCE_DIR}/tools")
+target_compile_definitions(rsw_analytic PRIVATE RSW_TOOLS_DIR="${PROJECT_SOURCE_DIR}/tools"
+  RSW_SOURCE_MATERIALS_DIR="${PROJECT_SOURCE_DIR}/materials/data")
 
 add_executable(test_calibration_farm
   ${CMAKE_CURRENT_LIST_DIR}/test_farm.cpp
