@@ -18,12 +18,13 @@
 
 namespace rsw::contact {
 
-// Constants shared by the film-contact interfaces of a model.
+// Constants shared by the film-contact interfaces of a model; the weld case's keys
+// contact.htc_p2..p4, bonding_band and bonding_gap take their defaults from here.
 struct FilmContactConstants {
   ThermalContactConstants thermal;  // P2..P4 of paper eq. 2
   double closure_gap = 1e-6;        // m, g_c of χ(g)
   double bonded_factor = 1e3;       // F of the bonded conductance
-  double bonding_band = 0;          // K, Δ of bonding_degree (0: bond at the solidus)
+  double bonding_band = 50;         // K, Δ of bonding_degree (0: bond at the solidus)
   double bonding_gap = 1e-6;        // m, points farther apart do not bond
 };
 

@@ -903,11 +903,11 @@ struct Mechanics::Impl {
       // Error estimate of the converging iteration (Deuflhard, Newton Methods for
       // Nonlinear Problems, Springer 2004, §2.1): once two full steps in a row contract
       // superlinearly, the next correction, about |Δu_k|² / |Δu_k−1|, bounds the
-      // iterate's remaining error. Below settings.error_estimate_tolerance the step is
+      // iterate's remaining error. Below settings.mechanics_error_estimate the step is
       // accepted without the iteration that would only confirm it, while the residual
       // is within 10² of its tolerance.
       if (alpha == 1.0 && previous_correction > 0 && correction < 0.1 * previous_correction &&
-          correction * correction / previous_correction <= settings.error_estimate_tolerance &&
+          correction * correction / previous_correction <= settings.mechanics_error_estimate &&
           norm <= 1e2 * tolerance)
         return Outcome::converged;
       previous_correction = alpha == 1.0 ? correction : 0.0;
@@ -930,7 +930,7 @@ struct Mechanics::Impl {
     MechanicsStepReport report;
     fem::SparseMatrix K;
     Eigen::VectorXd R;
-    const double tolerance = settings.residual_tolerance * std::max(load_scale, 1.0);
+    const double tolerance = settings.mechanics_tolerance * std::max(load_scale, 1.0);
     const Eigen::VectorXd start = increment;
     if (K_start && R_start) {
       K.swap(*K_start);

@@ -91,12 +91,12 @@ struct MechanicsSettings {
   double seating_stiffness = 1e3;
   int max_iterations = 40;               // per Newton solve (one target of the continuation)
   int max_continuation_iterations = 200;  // over all targets of a step's continuation
-  double residual_tolerance = 1e-7;       // relative to the load scale
+  double mechanics_tolerance = case_default("solver.mechanics_tolerance");  // relative to the load scale
   double displacement_tolerance = 1e-13;  // m, on the Newton correction
   // m: a step is also accepted when the estimated remaining error |Δu_k|²/|Δu_k−1| of
   // a superlinearly converging iteration is below this and |R| within 10² of the
   // residual tolerance (0 turns the estimate off).
-  double error_estimate_tolerance = 1e-10;
+  double mechanics_error_estimate = case_default("solver.mechanics_error_estimate");
   // Cells whose Gauss points are elastic and provably stay so (a bound on the stress
   // change from the displacement change since the cell's last full evaluation) take
   // their force and tangent from the linear update f(Δu*) − K_e (Δu − Δu*) instead of

@@ -8,6 +8,8 @@
 // their keys; the paper's nominal values (§3.1) ship as validation/paper_nominal.
 #include "physics/problem.hpp"
 
+#include "contact/film_contact_law.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -19,6 +21,16 @@ using fem::ConfigSchema;
 using fem::Range;
 
 namespace {
+
+// "0.25 mm" from 0.25e-3 m, "1 um" from 1e-6 m, "50" from 50: schema defaults taken
+// from a settings struct.
+std::string plain(double value, const char* unit = "") {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g%s", value, unit);
+  return text;
+}
+std::string millimetres(double metres) { return plain(metres * 1e3, " mm"); }
+std::string micrometres(double metres) { return plain(metres * 1e6, " um"); }
 
 constexpr double pi = 3.14159265358979323846;
 
@@ -128,16 +140,18 @@ void declare_electrodes_and_mesh(ConfigSchema& s) {
 
   s.section("mesh", "Quadtree mesh of bilinear quadrilaterals, built once from the geometry "
                     "(never from contact parameters).");
-  s.number("mesh.base_size", "m", "mm").default_value("0.25 mm")
+  // The defaults are meshes::MeshSettings' (declared there once).
+  const meshes::MeshSettings mesh;
+  s.number("mesh.base_size", "m", "mm").default_value(millimetres(mesh.base_size))
       .range(Range::closed(0.01, 5))
       .doc("Edge of a level-0 cell (paper §2.1: 0.25 mm).");
-  s.number("mesh.weld_zone.radius", "m", "mm").default_value("4.5 mm")
+  s.number("mesh.weld_zone.radius", "m", "mm").default_value(millimetres(mesh.weld_zone_radius))
       .range(Range::open_closed(0, 200))
       .doc("Radius of the weld-zone refinement box, from the axis.");
-  s.number("mesh.weld_zone.electrode_depth", "m", "mm").default_value("1 mm")
+  s.number("mesh.weld_zone.electrode_depth", "m", "mm").default_value(millimetres(mesh.weld_zone_electrode_depth))
       .range(Range::closed(0, 50))
       .doc("How far the weld-zone box reaches into each electrode beyond the sheet stack.");
-  s.integer("mesh.weld_zone.levels").default_value("2").range(Range::closed(0, 4))
+  s.integer("mesh.weld_zone.levels").default_value(std::to_string(mesh.weld_zone_levels)).range(Range::closed(0, 4))
       .doc("Refinement levels in the weld zone (paper §2.1: 2, i.e. 0.0625 mm cells).");
   s.list("mesh.refinement_boxes").items(0, 20).default_value("[]")
       .doc("Further refinement boxes in stack coordinates (z = 0 at mid-stack).");
@@ -181,21 +195,23 @@ void declare_contact(ConfigSchema& s) {
   declare_interface(s, "electrode_sheet", "electrode/sheet", "");
   declare_interface(s, "sheet_sheet", "sheet/sheet",
                     "; the paper uses one P1 for all interfaces, so set both to mirror it");
-  s.number("contact.htc_p2", "m", "um").default_value("1 um")
+  // The defaults of the shared constants are contact::FilmContactConstants' (declared there once).
+  const contact::FilmContactConstants film;
+  s.number("contact.htc_p2", "m", "um").default_value(micrometres(film.thermal.p2))
       .range(Range::open_closed(0, 1000))
       .doc("HTC constant P2 (paper eq. 2), fixed: Simufact's value is not public; 1 um puts "
            "the E/S conductance near 1e5 W/(m^2*K) at P1 = 1e-3 and 1e7 at P1 = 0.1, the "
            "range reported for RSW.");
-  s.number("contact.htc_p3", "1", "1").default_value("1")
+  s.number("contact.htc_p3", "1", "1").default_value(plain(film.thermal.p3))
       .range(Range::open_closed(0, 100))
       .doc("HTC constant P3 (paper eq. 2), fixed; our choice, as for P2.");
-  s.number("contact.htc_p4", "1", "1").default_value("1")
+  s.number("contact.htc_p4", "1", "1").default_value(plain(film.thermal.p4))
       .range(Range::open_closed(0, 100))
       .doc("HTC exponent P4 (paper eq. 2), fixed; our choice, as for P2.");
   s.number("contact.friction_coefficient", "1", "1").default_value("0.3")
       .range(Range::closed(0, 1))
       .doc("Coulomb friction coefficient on all contact interfaces; 0 is frictionless.");
-  s.number("contact.bonding_band", "K", "K").default_value("50 K")
+  s.number("contact.bonding_band", "K", "K").default_value(plain(film.bonding_band) + " K")
       .range(Range::closed(0, 200))
       .doc("Sheet/sheet points bond gradually as both sides approach their solidus: the "
            "bonding degree rises smoothly (C1) from 0 at this much below the solidus to 1 at "
@@ -203,7 +219,7 @@ void declare_contact(ConfigSchema& s) {
            "its share of the traction. 0 bonds a point at once at the solidus, so R drops up "
            "to 10 % in a step and outputs jump between neighbouring parameter values.");
 
-  s.number("contact.bonding_gap", "m", "um").default_value("1 um")
+  s.number("contact.bonding_gap", "m", "um").default_value(micrometres(film.bonding_gap))
       .range(Range::open_closed(0, 1000))
       .doc("Sheets fuse only where they touch: a sheet/sheet point's bonding degree is "
            "multiplied by a factor of its gap that falls smoothly (C1) from 1 at zero gap to 0 "

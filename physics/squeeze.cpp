@@ -42,7 +42,7 @@ SqueezeResult squeeze(Mechanics& mechanics, double target_force, const Eigen::Ve
     mechanics.commit();
     result.steps.push_back({"displacement", mechanics.electrode_force(), w, report.iterations});
   }
-  auto ramp = ramp_force(mechanics, target_force, settings.n_force_steps, nodal_temperature);
+  auto ramp = ramp_force(mechanics, target_force, settings.squeeze_force_steps, nodal_temperature);
   result.steps.insert(result.steps.end(), ramp.steps.begin(), ramp.steps.end());
   result.converged = ramp.converged;
   result.message = ramp.message;

@@ -4,7 +4,7 @@
 // has nothing to push against. The squeeze therefore first seats the stack under
 // displacement control (the upper end face moves down in steps of `seat_step`)
 // until the transmitted force reaches `seat_fraction` of the target, then raises
-// the force linearly to the target in `n_force_steps` force-controlled steps. Each
+// the force linearly to the target in `squeeze_force_steps` force-controlled steps. Each
 // converged step is committed. The steps depend only on the geometry and the
 // target force, never on model parameters.
 #pragma once
@@ -19,10 +19,10 @@
 namespace rsw::physics {
 
 struct SqueezeSettings {
-  double seat_step = 1e-6;       // m
+  double seat_step = case_default("solver.seat_step");  // m
   double seat_fraction = 0.05;   // of the target force
   int max_seat_steps = 400;
-  int n_force_steps = 10;
+  int squeeze_force_steps = static_cast<int>(case_default("solver.squeeze_force_steps"));
 };
 
 struct SqueezeStep {

@@ -44,7 +44,7 @@ ThermalSettings thermal_settings(const ThermalParameters& p) {
   s.air_htc = p.air_htc;
   s.ambient_temperature = p.ambient_temperature;
   s.melt_conductivity = p.melt_conductivity;
-  s.melt_smoothing = p.melt_conductivity_band;
+  s.melt_conductivity_band = p.melt_conductivity_band;
   return s;
 }
 
@@ -112,7 +112,7 @@ struct Thermal::Impl {
         dofs(m, 1),
         constraints(dofs.n_dofs()),
         interfaces(m, std::move(mdl), dofs, s.n_gauss, s.search_margin, "Thermal"),
-        implicit_blend(s.melt_conductivity > 0 && s.melt_smoothing > 0 && s.implicit_melt_blend),
+        implicit_blend(s.melt_conductivity > 0 && s.melt_conductivity_band > 0 && s.implicit_melt_blend),
         solver(implicit_blend ? fem::SolverKind::klu : fem::SolverKind::cholmod),
         geometry(m, s.n_gauss) {
     // The unsymmetric tangent (λ_m blend) is factorised by KLU, which refactorises each
@@ -247,8 +247,8 @@ struct Thermal::Impl {
         table_conductivity_q[k] = table;
         if (!melt_switch_cell[e]) {
           conductivity_q[k] = table;
-        } else if (settings.melt_smoothing > 0) {
-          const double w = materials::smoothstep(Tq, T_m - settings.melt_smoothing, T_m).value;
+        } else if (settings.melt_conductivity_band > 0) {
+          const double w = materials::smoothstep(Tq, T_m - settings.melt_conductivity_band, T_m).value;
           conductivity_q[k] = (1 - w) * table + w * lambda_m;
         } else {
           conductivity_q[k] = melt_state[k] ? lambda_m : table;
@@ -276,7 +276,7 @@ struct Thermal::Impl {
     if (blend) {
       const double T_m = cell_material[e]->melting_temperature();
       for (int b = 0; b < 4; ++b) {
-        const auto wb = melt_blend(Tc[b], T_m, settings.melt_smoothing);
+        const auto wb = melt_blend(Tc[b], T_m, settings.melt_conductivity_band);
         blend_weight[b] = wb.slope;
         blend_integral[b] = wb.value;
       }

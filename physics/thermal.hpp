@@ -115,9 +115,11 @@ struct ThermalSettings {
   // Fixed temperatures (°C) on named boundaries (verification problems); these
   // boundaries get no convection.
   std::vector<std::pair<std::string, double>> fixed_temperatures;
-  double melt_conductivity = 0.0;     // W/(m·K), λ_m; <= 0 keeps the tables everywhere
+  // W/(m·K), λ_m (thermal.melt_conductivity); <= 0 keeps the tables everywhere
+  double melt_conductivity = case_default("thermal.melt_conductivity");
   std::string melt_conductivity_prefix = "sheet_";  // bodies whose k switches to λ_m
-  double melt_smoothing = 0.0;        // K, blend band below T_melting (0: sharp switch)
+  // K, blend band below T_melting (thermal.melt_conductivity_band; 0: sharp switch)
+  double melt_conductivity_band = case_default("thermal.melt_conductivity_band");
   // With a blend band: the blend is implicit in nodal Kirchhoff form (above; the
   // table part of k stays at the solve's starting field) and the tangent unsymmetric
   // (KLU instead of CHOLMOD). false: the blend at the solve's starting field too.

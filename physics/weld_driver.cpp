@@ -170,8 +170,8 @@ void WeldDriver::setup() {
   ms.contact_penalty_factor = problem_.solver.contact_penalty_factor;
   ms.contact_smoothing = problem_.solver.contact_smoothing;
   ms.friction_penalty_ratio = problem_.solver.friction_penalty_ratio;
-  ms.residual_tolerance = problem_.solver.mechanics_tolerance;
-  ms.error_estimate_tolerance = problem_.solver.mechanics_error_estimate;
+  ms.mechanics_tolerance = problem_.solver.mechanics_tolerance;
+  ms.mechanics_error_estimate = problem_.solver.mechanics_error_estimate;
   ms.verbose = verbose_;
   if (problem_.solver.two_pass_sheet_contact)
     for (const auto& [name, pair] : mesh_.interfaces)
@@ -216,7 +216,7 @@ std::string WeldDriver::squeeze() {
   const Eigen::VectorXd T = Eigen::VectorXd::Constant(mesh_.n_nodes(), problem_.thermal.initial_temperature);
   SqueezeSettings ss;
   ss.seat_step = problem_.solver.seat_step;
-  ss.n_force_steps = problem_.solver.squeeze_force_steps;
+  ss.squeeze_force_steps = problem_.solver.squeeze_force_steps;
   try {
     squeeze_result_ = physics::squeeze(*mech_, problem_.schedule.force.at(0.0), T, ss);
   } catch (const std::exception& e) {

@@ -5,6 +5,7 @@
 #include "physics/electro_thermal_step.hpp"
 #include "physics/mechanics.hpp"
 #include "physics/problem.hpp"
+#include "physics/squeeze.hpp"
 #include "physics/thermal.hpp"
 #include "physics/weld_simulation.hpp"
 
@@ -153,16 +154,23 @@ TEST(Problem, SolverSettingsMirroringAKeyStartAtItsSchemaDefault) {
   EXPECT_EQ(mechanics.friction_coefficient, defaults.contact.friction_coefficient);
   EXPECT_EQ(mechanics.contact_penalty_factor, defaults.solver.contact_penalty_factor);
   EXPECT_EQ(mechanics.contact_smoothing, defaults.solver.contact_smoothing);
+  EXPECT_EQ(mechanics.mechanics_tolerance, defaults.solver.mechanics_tolerance);
+  EXPECT_EQ(mechanics.mechanics_error_estimate, defaults.solver.mechanics_error_estimate);
   const physics::ThermalSettings thermal;
   EXPECT_EQ(thermal.initial_temperature, defaults.thermal.initial_temperature);
   EXPECT_EQ(thermal.water_htc, defaults.thermal.water_htc);
   EXPECT_EQ(thermal.water_temperature, defaults.thermal.water_temperature);
   EXPECT_EQ(thermal.air_htc, defaults.thermal.air_htc);
   EXPECT_EQ(thermal.ambient_temperature, defaults.thermal.ambient_temperature);
+  EXPECT_EQ(thermal.melt_conductivity, defaults.thermal.melt_conductivity);
+  EXPECT_EQ(thermal.melt_conductivity_band, defaults.thermal.melt_conductivity_band);
   const physics::CouplingSettings coupling;
   EXPECT_EQ(coupling.acceleration_depth, defaults.solver.coupling_acceleration_depth);
   EXPECT_EQ(coupling.tolerance, defaults.solver.coupling_tolerance);
   EXPECT_EQ(coupling.max_iterations, defaults.solver.max_coupling_iterations);
+  const physics::SqueezeSettings squeeze;
+  EXPECT_EQ(squeeze.seat_step, defaults.solver.seat_step);
+  EXPECT_EQ(squeeze.squeeze_force_steps, defaults.solver.squeeze_force_steps);
 }
 
 TEST(Problem, PaperNominalUsesThePapersContactValues) {

@@ -267,7 +267,7 @@ TEST(MechanicsVerification, ErrorEstimateStopsNewtonWithinItsToleranceOfTheConve
   auto squeezed = [&](double estimate_tolerance, int& iterations) {
     physics::MechanicsSettings s;
     s.friction_coefficient = problem.contact.friction_coefficient;
-    s.error_estimate_tolerance = estimate_tolerance;
+    s.mechanics_error_estimate = estimate_tolerance;
     physics::Mechanics mech(mesh, {&copper, &steel, &steel, &copper}, s, 20.0);
     const auto result = physics::squeeze(mech, problem.schedule.force.at(0.0), T);
     EXPECT_TRUE(result.converged) << result.message;

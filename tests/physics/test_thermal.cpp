@@ -88,6 +88,8 @@ physics::ThermalSettings insulated(double initial_temperature) {
   s.initial_temperature = initial_temperature;
   s.water_htc = 0;
   s.air_htc = 0;
+  s.melt_conductivity = 0;  // the tables everywhere
+  s.melt_conductivity_band = 0;
   return s;
 }
 
@@ -408,7 +410,7 @@ TEST(ThermalVerification, EnergyIsConservedThroughMeltingAndBonding) {
     ts.air_htc = 2e3;  // on the rims and the end faces: a visible heat loss
     ts.adiabatic_suffixes = {".axis"};
     ts.melt_conductivity = 117.5;
-    ts.melt_smoothing = band;
+    ts.melt_conductivity_band = band;
     ts.temperature_tolerance = 1e-6;
     physics::Thermal thermal(mesh, mats, model, ts);
     double electrical_energy = 0, stored = 0, removed = 0, worst = 0;
@@ -460,7 +462,7 @@ TEST(ThermalNewton, TangentMatchesFiniteDifferences) {
   physics::ThermalSettings ts;
   ts.air_htc = 2e3;
   ts.melt_conductivity = 117.5;
-  ts.melt_smoothing = 20;
+  ts.melt_conductivity_band = 20;
   physics::Thermal thermal(mesh, {&steel, &steel}, model, ts);
   std::vector<contact::InterfacePairing> pairings;
   pairings.emplace_back(mesh, "ss_1_2", 2);
@@ -558,7 +560,7 @@ TEST(ThermalVerification, MeltBlendIsImplicitAndNodallyExactInKirchhoffForm) {
     physics::ThermalSettings ts = insulated(start);
     ts.fixed_temperatures = {{"sheet_1.bottom", T_b}, {"sheet_1.top", T_t}};
     ts.melt_conductivity = lambda_m;
-    ts.melt_smoothing = band;
+    ts.melt_conductivity_band = band;
     ts.temperature_tolerance = 1e-9;
     physics::Thermal thermal(mesh, {&metal}, {}, ts);
     const auto report = thermal.solve(1e8, mesh.nodes, contact, {}, {});
