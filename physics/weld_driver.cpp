@@ -156,7 +156,11 @@ void WeldDriver::setup() {
   materials_.reserve(mesh_.n_bodies());
   for (const auto& body : mesh_.body_names) materials_.push_back(library.load(material_of_body(problem_, body)));
   for (const auto& m : materials_) body_materials_.push_back(&m);
-  for (const auto& sh : problem_.geometry.sheets) sheet_bodies_.push_back(mesh_.body_index(sh.name));
+  for (const auto& sh : problem_.geometry.sheets) {
+    sheet_bodies_.push_back(mesh_.body_index(sh.name));
+    const materials::Material& m = materials_[sheet_bodies_.back()];
+    result_.sheets.push_back({sh.name, sh.material, m.solidus(), m.liquidus()});
+  }
   for (int b = 0; b < mesh_.n_bodies(); ++b) {
     liquidus_.push_back(body_materials_[b]->liquidus());
     solidus_.push_back(body_materials_[b]->solidus());

@@ -263,6 +263,8 @@ void write_summary_json(const fs::path& file, const Problem& problem, const RunR
   for (const auto& [name, count] : result.mechanics_linear_algebra) j["mechanics_linear_algebra"][name] = count;
   for (const auto& [name, count] : result.thermal_linear_algebra) j["thermal_linear_algebra"][name] = count;
   for (const auto& [name, value] : result.nugget) j["nugget"][name] = value;
+  for (const auto& s : result.sheets)
+    j["sheets"][s.sheet] = {{"material", s.material}, {"solidus_degC", s.solidus}, {"liquidus_degC", s.liquidus}};
   for (const auto& [name, value] : result.energy) j["energy_J"][name] = value;
   // The same peak as `rsw simulate` prints: the largest V/I of the signals (output times).
   if (const Signals::Peak peak = result.signals.maximum("resistance"); peak.found) {

@@ -93,6 +93,13 @@ struct RunResult {
   // Key results at the end of the squeeze.
   double squeeze_displacement = 0;  // m, upper end face travel (negative: down)
   std::vector<std::pair<std::string, double>> squeeze_contact_radius;  // per interface, m
+  // Each sheet's material and its solidus and liquidus (degC), the isotherms of the
+  // nugget (summary.json "sheets"; tools/paraview_weld.py draws them).
+  struct SheetMelting {
+    std::string sheet, material;
+    double solidus = 0, liquidus = 0;
+  };
+  std::vector<SheetMelting> sheets;
   std::vector<std::pair<std::string, double>> squeeze_peak_pressure;   // per interface, Pa
   double squeeze_indentation = 0;   // m, sheet_1 top on the axis relative to r = cap radius
   // Warnings of a successful run (e.g. an electrode that reached its solidus with
