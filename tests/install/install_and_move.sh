@@ -43,14 +43,15 @@ echo "$message"
 
 # 3. A weld with the source and build trees out of reach.
 weld=("$rsw" simulate "$work/weld.yaml" -o "$work/weld" "${options[@]}")
-if unshare -rm true 2> /dev/null; then
+mkdir "$work/probe"
+if unshare -rm mount -t tmpfs none "$work/probe" 2> /dev/null; then
   # Hide the build tree first where it lies outside the source tree.
   unshare -rm bash -c 'case "$2/" in "$1"/*) ;; *) mount -t tmpfs none "$2" || exit 1 ;; esac
                        mount -t tmpfs none "$1" && [[ ! -e "$1/CMakeLists.txt" ]] && shift 2 && "$@"' \
     hide "$source" "$build" "${weld[@]}"
   echo "weld run with $source and $build hidden"
 else
-  echo "note: no mount namespace here (unshare -rm refused); the weld runs with the trees in place"
+  echo "note: no private mounts here (unshare -rm refused); the weld runs with the trees in place"
   "${weld[@]}"
 fi
 [[ -s "$work/weld/results.h5" && -s "$work/weld/summary.json" ]] || fail "the weld wrote no results"
