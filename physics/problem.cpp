@@ -29,7 +29,12 @@ std::string plain(double value, const char* unit = "") {
   std::snprintf(text, sizeof text, "%g%s", value, unit);
   return text;
 }
-std::string millimetres(double metres) { return plain(metres * 1e3, " mm"); }
+// "0.25 mm": lengths in messages and schema defaults.
+std::string mm(double metres) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.4g mm", metres * 1e3);
+  return buffer;
+}
 std::string micrometres(double metres) { return plain(metres * 1e6, " um"); }
 
 constexpr double pi = 3.14159265358979323846;
@@ -142,13 +147,13 @@ void declare_electrodes_and_mesh(ConfigSchema& s) {
                     "(never from contact parameters).");
   // The defaults are meshes::MeshSettings' (declared there once).
   const meshes::MeshSettings mesh;
-  s.number("mesh.base_size", "m", "mm").default_value(millimetres(mesh.base_size))
+  s.number("mesh.base_size", "m", "mm").default_value(mm(mesh.base_size))
       .range(Range::closed(0.01, 5))
       .doc("Edge of a level-0 cell (paper §2.1: 0.25 mm).");
-  s.number("mesh.weld_zone.radius", "m", "mm").default_value(millimetres(mesh.weld_zone_radius))
+  s.number("mesh.weld_zone.radius", "m", "mm").default_value(mm(mesh.weld_zone_radius))
       .range(Range::open_closed(0, 200))
       .doc("Radius of the weld-zone refinement box, from the axis.");
-  s.number("mesh.weld_zone.electrode_depth", "m", "mm").default_value(millimetres(mesh.weld_zone_electrode_depth))
+  s.number("mesh.weld_zone.electrode_depth", "m", "mm").default_value(mm(mesh.weld_zone_electrode_depth))
       .range(Range::closed(0, 50))
       .doc("How far the weld-zone box reaches into each electrode beyond the sheet stack.");
   s.integer("mesh.weld_zone.levels").default_value(std::to_string(mesh.weld_zone_levels)).range(Range::closed(0, 4))
@@ -372,12 +377,6 @@ ConfigSchema build_schema() {
   declare_solver(s);
   declare_output(s);
   return s;
-}
-
-std::string mm(double metres) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.4g mm", metres * 1e3);
-  return buffer;
 }
 
 // Throws the standard error on the first of `keys` the user set (the first key if none
