@@ -1,9 +1,11 @@
-// The one wrapper around the SuiteSparse direct solvers (CHOLMOD and UMFPACK through
-// Eigen's support modules, KLU through its C interface): CHOLMOD for symmetric
-// positive definite systems (heat and electrical conduction, elasticity without
-// friction), UMFPACK and KLU for general unsymmetric ones (friction, the thermal
-// tangent with the λ_m blend). The symbolic analysis is done
-// once per sparsity pattern and reused by every numerical factorisation.
+// The one wrapper around the sparse linear solvers: the SuiteSparse direct solvers
+// (CHOLMOD and UMFPACK through Eigen's support modules, KLU through its C interface)
+// and, inside PreconditionedGmres, SUNDIALS' flexible GMRES (SUNLinSol_SPFGMR on
+// serial N_Vectors). CHOLMOD for symmetric positive definite systems (heat and
+// electrical conduction, elasticity without friction), UMFPACK and KLU for general
+// unsymmetric ones (friction, the thermal tangent with the λ_m blend). The symbolic
+// analysis is done once per sparsity pattern and reused by every numerical
+// factorisation.
 //
 // The factorised pattern is that of the entries that have been nonzero in some
 // matrix factorised since the caller's pattern was set, not the caller's whole
@@ -79,10 +81,11 @@ class LinearSolver {
 // condition number of A times ω.
 double componentwise_backward_error(const SparseMatrix& A, const Eigen::VectorXd& x, const Eigen::VectorXd& b);
 
-// Iterative solution of a general system A x = b by GMRES, right-preconditioned with
-// a direct factorisation of a nearby matrix: the symmetric part (M + Mᵀ)/2 of some
-// earlier matrix M of the same pattern (CHOLMOD), or M itself (UMFPACK) when that
-// symmetric part is not positive definite. Made for Newton's method on a slowly
+// Iterative solution of a general system A x = b by GMRES (SUNDIALS' SPFGMR, no
+// restart, modified Gram-Schmidt), right-preconditioned with a direct factorisation
+// of a nearby matrix: the symmetric part (M + Mᵀ)/2 of some earlier matrix M of the
+// same pattern (CHOLMOD), or M itself (UMFPACK) when that symmetric part is not
+// positive definite. Made for Newton's method on a slowly
 // changing, nearly symmetric tangent (the unsymmetric part of a contact tangent is
 // the friction coupling): one factorisation serves many iterations and steps, and
 // the GMRES iterations show when it has gone stale. The tolerance is on the true

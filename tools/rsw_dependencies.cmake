@@ -8,7 +8,8 @@ find_package(HDF5 REQUIRED COMPONENTS C)
 find_package(VTK 9.1 REQUIRED COMPONENTS CommonCore CommonDataModel IOXML IOLegacy)
 find_package(yaml-cpp REQUIRED)
 find_package(nlohmann_json 3.10 REQUIRED)
-# SUNDIALS 6 (Debian 12): KINSOL's Anderson-accelerated fixed point (fem/fixed_point).
+# SUNDIALS 6 (Debian 12): KINSOL's Anderson-accelerated fixed point (fem/fixed_point)
+# and the flexible GMRES SPFGMR (fem/linear_solver).
 find_package(SUNDIALS 6 REQUIRED CONFIG)
 find_package(NLopt REQUIRED)
 

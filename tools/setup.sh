@@ -9,7 +9,7 @@ packages=(
   libeigen3-dev            # dense/sparse linear algebra
   libsuitesparse-dev       # CHOLMOD, UMFPACK, KLU direct solvers
   libopenblas0-serial      # optimised BLAS/LAPACK under SuiteSparse (replaces reference BLAS)
-  libsundials-dev          # KINSOL's Anderson-accelerated fixed point (electro-thermal coupling)
+  libsundials-dev          # KINSOL's Anderson-accelerated fixed point (electro-thermal coupling), SPFGMR (GMRES)
   libvtk9-dev              # .vtu/.vtm/.pvd output and read-back in tests
   libhdf5-dev hdf5-tools   # results.h5 and h5dump
   libgtest-dev libgmock-dev
