@@ -59,6 +59,8 @@ Material::Material(MaterialData data) : data_(std::move(data)) {
           "melting temperature must be finite");
   require(std::isfinite(data_.latent_heat) && data_.latent_heat >= 0, data_,
           "latent heat must be >= 0");
+  require(std::isnan(data_.boiling_point) || data_.boiling_point > data_.liquidus, data_,
+          "boiling point must lie above the liquidus");
   require(std::isfinite(data_.strength_floor) && data_.strength_floor > 0, data_,
           "strength floor must be positive");
   require(std::isfinite(data_.strength_floor_transition) &&

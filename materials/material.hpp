@@ -43,6 +43,7 @@
 
 #include "materials/property_table.hpp"
 
+#include <cmath>
 #include <string>
 
 namespace rsw::materials {
@@ -70,6 +71,7 @@ struct MaterialData {
   double liquidus = 0;                   // degC
   double melting_temperature = 0;        // degC, T_melting of paper eq. 3
   double latent_heat = 0;                // J/kg
+  double boiling_point = std::nan("");   // degC, at 1 atm; NaN: not given
   double strength_floor = 0;             // Pa, yield stress of the melt
   double strength_floor_transition = 50; // K, width of the blend below the solidus
 };
@@ -108,6 +110,7 @@ class Material {
   double liquidus() const { return data_.liquidus; }                // degC
   double melting_temperature() const { return data_.melting_temperature; }  // degC
   double latent_heat() const { return data_.latent_heat; }          // J/kg
+  double boiling_point() const { return data_.boiling_point; }      // degC; NaN where the file gives none
   double strength_floor() const { return data_.strength_floor; }    // Pa
   double strength_floor_transition() const { return data_.strength_floor_transition; }  // K
 

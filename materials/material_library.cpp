@@ -197,6 +197,11 @@ fem::ConfigSchema material_file_schema() {
       .default_value("0 kJ/kg")
       .range(fem::Range::closed(0, 5000))
       .doc("Required: latent heat of fusion, released between solidus and liquidus.");
+  schema.number("melting.boiling_point", "degC", "degC")
+      .default_value("4000 degC")
+      .range(temperature_range)
+      .doc("Optional: boiling point at 1 atm. Not used by the physics; a weld whose sheet "
+           "passes it gets a plausibility warning (none where the file does not give it).");
   declare_provenance(schema, "melting");
 
   schema.section("strength_floor", "Yield stress of the melt and the blend into it.");
@@ -276,6 +281,11 @@ Material load_material_file(const std::string& path) {
   data.liquidus = config.number("melting.liquidus");
   data.melting_temperature = config.number("melting.melting_temperature");
   data.latent_heat = config.number("melting.latent_heat");
+  if (!config.is_default("melting.boiling_point")) {
+    data.boiling_point = config.number("melting.boiling_point");
+    if (!(data.boiling_point > data.liquidus))
+      config.fail("melting.boiling_point", "must lie above the liquidus (" + config.display("melting.liquidus") + ")");
+  }
   if (!(data.liquidus > data.solidus)) {
     config.fail("melting.liquidus",
                 "must lie above the solidus (" + config.display("melting.solidus") + ")");

@@ -5,6 +5,7 @@
 #include "fem/fe_values.hpp"
 #include "meshes/weld_mesh.hpp"
 #include "physics/interface_model.hpp"
+#include "physics/plausibility.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -503,6 +504,22 @@ void WeldDriver::finish() {
   n.emplace_back("w_elec", n_es ? w / n_es : 0.0);
   n.emplace_back("d_indent", indentation(problem_, mesh_, mech_->displacement()));
   n.emplace_back("t_unmolt", liq.unmolten_thickness);
+
+  // Results the solvers reached but an engineer would reject (plausibility.hpp).
+  WeldOutcome outcome;
+  outcome.nugget_diameter = liq.diameter;
+  outcome.nugget_height = liq.height;
+  for (std::size_t k = 0; k < liq.penetration.size(); ++k)
+    outcome.penetration.emplace_back(problem_.geometry.sheets[k].name, liq.penetration[k]);
+  for (int b : sheet_bodies_) {
+    double highest = -1e300;
+    for (int node = 0; node < mesh_.n_nodes(); ++node)
+      if (mesh_.node_body[node] == b) highest = std::max(highest, peak[node]);
+    outcome.sheets.push_back({mesh_.body_names[b], materials_[b].name(), highest, materials_[b].boiling_point()});
+  }
+  outcome.face_diameter = std::min(problem_.geometry.upper.face_diameter, problem_.geometry.lower.face_diameter);
+  outcome.stack_height = problem_.geometry.stack_height();
+  for (std::string& warning : plausibility_warnings(outcome)) result_.warnings.push_back(std::move(warning));
   const double e = last_.electrical_energy, stored = last_.stored_energy, removed = last_.removed_energy;
   result_.energy = {{"electrical", e},          {"stored", stored}, {"removed", removed},
                     {"imbalance", e - stored - removed}, {"nugget_fraction", nugget_energy_fraction_}};

@@ -167,6 +167,28 @@ TEST(MaterialLibrary, UserDirectoriesComeFirstAndShadowShippedFiles) {
   EXPECT_DOUBLE_EQ(library.load("CuCrZr").strength_floor(), 34.2e6);
 }
 
+// melting.boiling_point is optional (only the plausibility warning reads it): the
+// shipped files give iron's and copper's (CRC Handbook: 3134 K and 2835 K), a file
+// without it loads with none, and one at or below the liquidus is refused at its line.
+TEST(MaterialFile, BoilingPointIsOptionalAndMustLieAboveTheLiquidus) {
+  const MaterialLibrary library({shipped_directory});
+  EXPECT_DOUBLE_EQ(library.load("DP1200").boiling_point(), 2861.0);  // 3134 K to the degree
+  EXPECT_DOUBLE_EQ(library.load("CuCrZr").boiling_point(), 2562.0);  // 2835 K to the degree
+
+  const ScratchDirectory scratch("boiling");
+  const std::string text = read_text(shipped_directory + "/DP1200.yaml");
+  const std::string path = scratch.write("DP1200.yaml", replaced(text, "  boiling_point: 2861 degC\n", ""));
+  EXPECT_TRUE(std::isnan(load_material_file(path).boiling_point()));
+
+  const std::string low = replaced(text, "boiling_point: 2861 degC", "boiling_point: 1500 degC");
+  scratch.write("DP1200.yaml", low);
+  const std::string message = load_error(path);
+  EXPECT_NE(message.find(path + ":" + std::to_string(line_of(low, "boiling_point: 1500")) + ":"), std::string::npos)
+      << message;
+  EXPECT_NE(message.find("melting.boiling_point"), std::string::npos) << message;
+  EXPECT_NE(message.find("above the liquidus"), std::string::npos) << message;
+}
+
 TEST(MaterialFile, BadTableNamesFileLineAndKey) {
   const ScratchDirectory scratch("bad");
   const std::string text = read_text(shipped_directory + "/DP1200.yaml");
