@@ -16,10 +16,10 @@ std::string format(const char* pattern, double a, double b) {
 
 std::vector<std::string> plausibility_warnings(const WeldOutcome& o) {
   std::vector<std::string> warnings;
-  const std::string lead = "implausible result: ";
+  const std::string lead = "plausibility: ";
   if (o.nugget_diameter > o.face_diameter)
-    warnings.push_back(lead + format("the nugget (d_n_liq %.2f mm) is wider than the electrode face (%.2f mm); "
-                                     "a real weld would expel metal",
+    warnings.push_back(lead + format("the nugget (d_n_liq %.2f mm) is wider than the electrode face (%.2f mm), "
+                                     "where real welds risk expulsion (not modelled)",
                                      o.nugget_diameter * 1e3, o.face_diameter * 1e3));
   if (o.nugget_height > o.stack_height)
     warnings.push_back(lead + format("the nugget (h_n_liq %.2f mm) is taller than the sheet stack (%.2f mm)",

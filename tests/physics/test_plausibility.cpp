@@ -83,5 +83,5 @@ TEST(Plausibility, EveryPassedBoundWarnsOnceInAFixedOrder) {
   EXPECT_TRUE(contains(w[3], "sheet_2 by"));
   EXPECT_TRUE(contains(w[4], "sheet_1 reaches"));
   EXPECT_TRUE(contains(w[5], "sheet_2 reaches"));
-  for (const auto& text : w) EXPECT_EQ(text.rfind("implausible result: ", 0), 0u) << text;
+  for (const auto& text : w) EXPECT_EQ(text.rfind("plausibility: ", 0), 0u) << text;
 }

@@ -343,7 +343,7 @@ TEST(WeldRun, ElectrodeReachingSolidusWarnsOrStopsAsConfigured) {
   ASSERT_GE(j.at("warnings").size(), 1u);
   EXPECT_NE(j.at("warnings")[0].get<std::string>().find("above the solidus"), std::string::npos);
   for (std::size_t k = 1; k < j.at("warnings").size(); ++k)
-    EXPECT_EQ(j.at("warnings")[k].get<std::string>().rfind("implausible result: ", 0), 0u) << j.at("warnings")[k];
+    EXPECT_EQ(j.at("warnings")[k].get<std::string>().rfind("plausibility: ", 0), 0u) << j.at("warnings")[k];
   const double t_melt = j.at("electrode_melting_time_s").get<double>();
   EXPECT_GT(t_melt, 0.010);
   EXPECT_LT(t_melt, 0.031);
@@ -376,7 +376,7 @@ TEST(WeldRun, ExtremeScheduleSucceedsWithAWarningPerImplausibleResult) {
   const auto j = nlohmann::json::parse(in);
   std::vector<std::string> implausible;
   for (const auto& w : j.at("warnings"))
-    if (w.get<std::string>().rfind("implausible result: ", 0) == 0) implausible.push_back(w.get<std::string>());
+    if (w.get<std::string>().rfind("plausibility: ", 0) == 0) implausible.push_back(w.get<std::string>());
   ASSERT_EQ(implausible.size(), 6u) << j.at("warnings").dump(1);
   EXPECT_NE(implausible[0].find("wider than the electrode face (5.50 mm)"), std::string::npos) << implausible[0];
   EXPECT_NE(implausible[1].find("taller than the sheet stack (2.00 mm)"), std::string::npos) << implausible[1];
@@ -389,7 +389,7 @@ TEST(WeldRun, ExtremeScheduleSucceedsWithAWarningPerImplausibleResult) {
   const rsw::fem::Hdf5File h5(dir / "results.h5", rsw::fem::Hdf5Mode::read);
   const std::string stored = h5.string_attribute("/run", "warnings");
   for (const auto& w : implausible) EXPECT_NE(stored.find(w), std::string::npos) << w;
-  EXPECT_NE(out.find("warning: implausible result: the nugget"), std::string::npos) << out;
+  EXPECT_NE(out.find("warning: plausibility: the nugget"), std::string::npos) << out;
   fs::remove_all(dir);
 }
 
@@ -422,14 +422,14 @@ TEST(WeldRun, StudyRunTableCarriesThePlausibilityWarningsOfEachRun) {
   for (const auto& run : runs) {
     EXPECT_EQ(run.at("status"), "ok");
     const std::string warnings = run.value("warnings", "");
-    EXPECT_NE(warnings.find("implausible result: the nugget (d_n_liq"), std::string::npos) << warnings;
+    EXPECT_NE(warnings.find("plausibility: the nugget (d_n_liq"), std::string::npos) << warnings;
     EXPECT_NE(warnings.find("above the boiling point"), std::string::npos) << warnings;
   }
   std::ifstream csv(dir / "out" / "hot_runs.csv");
   const std::string table((std::istreambuf_iterator<char>(csv)), std::istreambuf_iterator<char>());
   std::size_t rows = 0;
-  for (std::size_t at = table.find("implausible result: sheet_1 reaches"); at != std::string::npos;
-       at = table.find("implausible result: sheet_1 reaches", at + 1))
+  for (std::size_t at = table.find("plausibility: sheet_1 reaches"); at != std::string::npos;
+       at = table.find("plausibility: sheet_1 reaches", at + 1))
     ++rows;
   EXPECT_EQ(rows, 2u) << table;
   fs::remove_all(dir);
