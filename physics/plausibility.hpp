@@ -1,5 +1,5 @@
 // Plausibility checks of a finished weld: results the solvers reached without
-// complaint but that a welding engineer would reject on sight, reported as warnings
+// complaint but that a welding engineer would question, reported as warnings
 // (summary.json, results.h5, the study's run table), never as failures, so that a
 // study or calibration keeps the run and its outputs stay continuous in the
 // parameters. Each check compares one result with one physical bound:

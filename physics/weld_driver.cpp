@@ -20,6 +20,15 @@ namespace rsw::physics {
 namespace fs = std::filesystem;
 
 namespace {
+// The largest of a nodal field (any container indexed by node) over one body's nodes.
+template <class Values>
+double highest_on_body(const fem::Mesh& mesh, const Values& values, int body) {
+  double highest = -1e300;
+  for (int node = 0; node < mesh.n_nodes(); ++node)
+    if (mesh.node_body[node] == body) highest = std::max(highest, static_cast<double>(values[node]));
+  return highest;
+}
+
 
 // The material name of a mesh body: the electrodes' and the sheets' materials of the case.
 std::string material_of_body(const Problem& problem, const std::string& body) {
@@ -320,9 +329,7 @@ void WeldDriver::record(double t) {
   const Eigen::VectorXd& T = thermal_->committed_temperature();
   r.max_temperature = -1e300;
   for (int b : sheet_bodies_) {
-    double m = -1e300;
-    for (int n = 0; n < mesh_.n_nodes(); ++n)
-      if (mesh_.node_body[n] == b) m = std::max(m, T[n]);
+    const double m = highest_on_body(mesh_, T, b);
     r.sheet_max_temperature.push_back(m);
     r.max_temperature = std::max(r.max_temperature, m);
   }
@@ -511,12 +518,9 @@ void WeldDriver::finish() {
   outcome.nugget_height = liq.height;
   for (std::size_t k = 0; k < liq.penetration.size(); ++k)
     outcome.penetration.emplace_back(problem_.geometry.sheets[k].name, liq.penetration[k]);
-  for (int b : sheet_bodies_) {
-    double highest = -1e300;
-    for (int node = 0; node < mesh_.n_nodes(); ++node)
-      if (mesh_.node_body[node] == b) highest = std::max(highest, peak[node]);
-    outcome.sheets.push_back({mesh_.body_names[b], materials_[b].name(), highest, materials_[b].boiling_point()});
-  }
+  for (int b : sheet_bodies_)
+    outcome.sheets.push_back({mesh_.body_names[b], materials_[b].name(), highest_on_body(mesh_, peak, b),
+                              materials_[b].boiling_point()});
   outcome.face_diameter = std::min(problem_.geometry.upper.face_diameter, problem_.geometry.lower.face_diameter);
   outcome.stack_height = problem_.geometry.stack_height();
   for (std::string& warning : plausibility_warnings(outcome)) result_.warnings.push_back(std::move(warning));
