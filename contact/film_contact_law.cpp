@@ -24,7 +24,7 @@ double FilmContactLaw::electrical_conductance(const InterfacePoint& pt) const {
   double h_contact = 0;
   if (pt.bonding_degree < 1 && pt.pressure > 0)
     h_contact = electrical_contact_conductance(*pt.slave, *pt.master, pt.pressure, pt.slave_temperature,
-                                               pt.master_temperature, properties_)
+                                               pt.master_temperature, properties_, pt.film_breakdown)
                     .value;
   return with_bonding(h_contact, pt, bonded_electrical_conductance, constants_.bonded_factor);
 }
@@ -45,6 +45,12 @@ double FilmContactLaw::bonding_degree(const InterfacePoint& pt) const {
   if (!properties_.bonding) return 0.0;
   return bonding_degree_at_gap(pt.slave_temperature, pt.slave->solidus(), pt.master_temperature,
                                pt.master->solidus(), constants_.bonding_band, pt.gap, constants_.bonding_gap);
+}
+
+double FilmContactLaw::film_breakdown_degree(const InterfacePoint& pt) const {
+  if (!constants_.film_breakdown) return 0.0;
+  return contact::film_breakdown_degree(pt.slave_temperature, pt.master_temperature, constants_.film_breakdown_start,
+                                        constants_.film_breakdown_end);
 }
 
 InterfaceModel film_contact_model(const std::vector<InterfaceProperties>& interfaces,

@@ -7,6 +7,8 @@
 // and, for an interface that bonds (sheet/sheet), at bonding degree β > 0 the film
 // fades in series with a bonded layer of conductance F (k_s + k_m)/h_local:
 //   h = 1/((1 − β)/h_contact + β/h_bonded),   β = S(x) χ(g; g_b)  (bonding_degree_at_gap).
+// The coating term ρ_c of h_e fades with the film's committed breakdown degree φ
+// (film_breakdown_degree of the hotter side's temperature; off: φ = 0).
 // Each side's properties at its own temperature. Units: Pa, m, °C, Ω·m, W/(m·K).
 #pragma once
 
@@ -26,6 +28,9 @@ struct FilmContactConstants {
   double bonded_factor = 1e3;       // F of the bonded conductance
   double bonding_band = 50;         // K, Δ of bonding_degree (0: bond at the solidus)
   double bonding_gap = 1e-6;        // m, points farther apart do not bond
+  bool film_breakdown = true;       // ρ_c fades with the film breakdown degree φ
+  double film_breakdown_start = 20;  // °C, T_start of film_breakdown_degree
+  double film_breakdown_end = 700;   // °C, T_end: the film is gone
 };
 
 class FilmContactLaw : public InterfaceLaw {
@@ -37,6 +42,7 @@ class FilmContactLaw : public InterfaceLaw {
   double thermal_conductance(const InterfacePoint& point) const override;
   bool bonds() const override { return properties_.bonding; }
   double bonding_degree(const InterfacePoint& point) const override;
+  double film_breakdown_degree(const InterfacePoint& point) const override;
 
   const InterfaceProperties& properties() const { return properties_; }
   const FilmContactConstants& constants() const { return constants_; }

@@ -45,7 +45,7 @@ void InterfaceCoupling::check(const ContactState& state) const {
   }
 }
 
-InterfacePoint InterfaceCoupling::point(const ContactState& state, const BondingState& bonding, std::size_t p,
+InterfacePoint InterfaceCoupling::point(const ContactState& state, const InterfaceHistory& history, std::size_t p,
                                         std::size_t i, const Eigen::VectorXd& temperature,
                                         const std::vector<const materials::Material*>& node_material) const {
   const ContactPoint& pt = (*state.pairings)[p].points()[i];
@@ -57,11 +57,12 @@ InterfacePoint InterfaceCoupling::point(const ContactState& state, const Bonding
   s.pressure = state.pressure[p][i];
   s.gap = pt.gap;
   s.face_length = face_lengths_[p][pt.slave_face];
-  s.bonding_degree = law(p).bonds() ? bonding.degree(static_cast<int>(p), static_cast<int>(i)) : 0.0;
+  s.bonding_degree = law(p).bonds() ? history.degree(static_cast<int>(p), static_cast<int>(i)) : 0.0;
+  s.film_breakdown = history.breakdown(static_cast<int>(p), static_cast<int>(i));
   return s;
 }
 
-void InterfaceCoupling::conductances(InterfaceField which, const ContactState& state, const BondingState& bonding,
+void InterfaceCoupling::conductances(InterfaceField which, const ContactState& state, const InterfaceHistory& history,
                                      const Eigen::VectorXd& temperature,
                                      const std::vector<const materials::Material*>& node_material,
                                      std::vector<std::vector<double>>& out) const {
@@ -75,7 +76,7 @@ void InterfaceCoupling::conductances(InterfaceField which, const ContactState& s
       if (!pt.paired || pairing.local_index(pt.slave_face, pt.master_nodes[0]) < 0 ||
           pairing.local_index(pt.slave_face, pt.master_nodes[1]) < 0)
         continue;
-      const InterfacePoint s = point(state, bonding, p, i, temperature, node_material);
+      const InterfacePoint s = point(state, history, p, i, temperature, node_material);
       out[p][i] = which == InterfaceField::electrical ? l.electrical_conductance(s) : l.thermal_conductance(s);
     }
   }

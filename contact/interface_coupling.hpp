@@ -82,13 +82,13 @@ class InterfaceCoupling {
   void check(const ContactState& state) const;
 
   // The state of point i of interface p: the sides' materials (`node_material` per
-  // mesh node) and temperatures, the pressure and gap of the contact state, β.
-  InterfacePoint point(const ContactState& state, const BondingState& bonding, std::size_t p, std::size_t i,
+  // mesh node) and temperatures, the pressure and gap of the contact state, β and φ.
+  InterfacePoint point(const ContactState& state, const InterfaceHistory& history, std::size_t p, std::size_t i,
                        const Eigen::VectorXd& temperature,
                        const std::vector<const materials::Material*>& node_material) const;
 
   // The law's conductance at every pairing point into out[p][i] (resized).
-  void conductances(InterfaceField which, const ContactState& state, const BondingState& bonding,
+  void conductances(InterfaceField which, const ContactState& state, const InterfaceHistory& history,
                     const Eigen::VectorXd& temperature, const std::vector<const materials::Material*>& node_material,
                     std::vector<std::vector<double>>& out) const;
 

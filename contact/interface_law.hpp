@@ -2,7 +2,8 @@
 // unit area, given the state of the point's two sides,
 //     h_e  (S/m²)      electrical conductance, j = h_e (φ_slave − φ_master),
 //     h    (W/(m²K))   thermal conductance,    q = h (T_slave − T_master),
-//     β    (-)         the bonding degree the point may reach (laws that bond).
+//     β    (-)         the bonding degree the point may reach (laws that bond),
+//     φ    (-)         the breakdown degree its coating film may reach (laws with a film).
 // The laws themselves are the pure functions of contact/interface_laws.hpp; an
 // InterfaceLaw picks them and their parameters for one kind of interface
 // (contact/film_contact_law.hpp). The mesh builder sets each interface's kind
@@ -29,6 +30,7 @@ struct InterfacePoint {
   double gap = 0;                 // m, > 0 open
   double face_length = 0;         // m, the slave face in the undeformed mesh
   double bonding_degree = 0;      // β ∈ [0, 1], committed (0 for laws that never bond)
+  double film_breakdown = 0;      // φ ∈ [0, 1], committed (0: film intact)
 };
 
 class InterfaceLaw {
@@ -43,6 +45,9 @@ class InterfaceLaw {
   // The bonding degree the point may reach in its present state (never decreasing:
   // the caller keeps the maximum); 0 for laws that never bond.
   virtual double bonding_degree(const InterfacePoint& /*point*/) const { return 0.0; }
+  // The breakdown degree the point's film may reach in its present state (never
+  // decreasing: the caller keeps the maximum); 0 for laws without a film that breaks.
+  virtual double film_breakdown_degree(const InterfacePoint& /*point*/) const { return 0.0; }
 };
 
 // The interfaces of a mesh with their laws, in mesh.interfaces order.

@@ -1,5 +1,5 @@
 // Interface laws: Bay–Wanheim electrical conductance, Simufact thermal conductance,
-// closure factor, interface Joule heat and bonding; equations in interface_laws.hpp.
+// closure factor, interface Joule heat, bonding and film breakdown; equations in interface_laws.hpp.
 #include "contact/interface_laws.hpp"
 
 #include <algorithm>
@@ -77,6 +77,11 @@ double bonding_degree_at_gap(double temperature_slave, double solidus_slave, dou
   return chi * bonding_degree(temperature_slave, solidus_slave, temperature_master, solidus_master, band);
 }
 
+double film_breakdown_degree(double temperature_slave, double temperature_master, double start, double end) {
+  const double x = std::clamp((std::max(temperature_slave, temperature_master) - start) / (end - start), 0.0, 1.0);
+  return x * x * (3 - 2 * x);
+}
+
 double partly_bonded_conductance(double contact, double bonded, double degree) {
   if (degree >= 1) return bonded;
   if (degree <= 0) return contact;
@@ -100,12 +105,13 @@ Softer softer_yield_stress(const materials::Material& a, double T_a, const mater
 
 Conductance electrical_contact_conductance(const materials::Material& a, const materials::Material& b,
                                            double normal_stress, double temperature_a, double temperature_b,
-                                           const InterfaceProperties& properties) {
+                                           const InterfaceProperties& properties, double film_breakdown) {
   const Softer soft = softer_yield_stress(a, temperature_a, b, temperature_b);
   const materials::PropertyValue ra = a.electrical_resistivity(temperature_a);
   const materials::PropertyValue rb = b.electrical_resistivity(temperature_b);
   const double mean_rho = 0.5 * (ra.value + rb.value);
-  const auto law = bay_wanheim_conductance(normal_stress, soft.value, mean_rho, properties.coating_resistivity,
+  const auto law = bay_wanheim_conductance(normal_stress, soft.value, mean_rho,
+                                           properties.coating_resistivity * (1 - film_breakdown),
                                            properties.film_thickness);
   return {law.conductance, law.d_normal_stress, law.d_flow_stress * soft.d_a + law.d_resistivity * 0.5 * ra.slope,
           law.d_flow_stress * soft.d_b + law.d_resistivity * 0.5 * rb.slope};
@@ -144,16 +150,22 @@ Conductance bonded_thermal_conductance(const materials::Material& a, const mater
           bonded_conductance(ka.slope, 0.0, local_size, factor), bonded_conductance(0.0, kb.slope, local_size, factor)};
 }
 
-BondingState::BondingState(const std::vector<InterfacePairing>& pairings) {
+InterfaceHistory::InterfaceHistory(const std::vector<InterfacePairing>& pairings) {
   for (const auto& p : pairings) degree_.emplace_back(p.points().size(), 0.0);
+  breakdown_ = degree_;
 }
 
-void BondingState::raise(int interface, int point, double value) {
+void InterfaceHistory::raise_breakdown(int interface, int point, double value) {
+  double& f = breakdown_[interface][point];
+  f = std::max(f, std::min(1.0, value));
+}
+
+void InterfaceHistory::raise(int interface, int point, double value) {
   double& b = degree_[interface][point];
   b = std::max(b, std::min(1.0, value));
 }
 
-int BondingState::n_bonded(int interface) const {
+int InterfaceHistory::n_bonded(int interface) const {
   if (degree_.empty()) return 0;
   return static_cast<int>(
       std::count_if(degree_[interface].begin(), degree_[interface].end(), [](double b) { return b >= 1.0; }));

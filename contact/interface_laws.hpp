@@ -49,6 +49,21 @@
 // 1/(2000) of one cell's and about 10⁻⁵ of the sheet stack's, negligible, while
 // keeping the assembled systems well conditioned for the direct solvers.
 //
+// Film breakdown (our choice; docs/MODEL.md, "Interfaces"): ρ_c stands for the surface
+// films (oxide, contaminants, coating), and measured contact resistances of steel
+// fall steeply as the interface heats under load (M. Vogler and S. Sheppard, Weld. J.
+// 72 (1993) 231s–238s; S.S. Babu et al., Sci. Technol. Weld. Join. 6 (2001) 126–132;
+// P. Rogeon et al., J. Mater. Process. Technol. 195 (2008) 117–124). So ρ_c is
+// multiplied by 1 − φ, the breakdown degree
+//     φ = S(x),  x = clamp((T_hot − T_start)/(T_end − T_start), 0, 1),  S(x) = 3x² − 2x³,
+// T_hot the hotter side's temperature. The band, T_start = 20 °C to T_end = 700 °C by
+// default (`contact.film_breakdown_start`, `_end`), the use of the hotter side and the
+// irreversibility are modelling choices, not measured values: a broken film does not
+// re-form within a weld, so φ is a history per pairing point (the largest value
+// reached, committed after a converged step, as β is). Coated sheets (zinc melts at
+// about 420 °C) may need another band. The constriction term 3 σ_soft ρ̄ keeps its own
+// temperature dependence.
+//
 // Sources: paper §2.1.1 (eqs. 1, 2); N. Bay and T. Wanheim, Wear 38 (1976) 201–209
 // (real contact area against normal stress); MOOSE electrical contact and MALAMUTE
 // interface heating verification problems (closed-form two-block solutions).
@@ -125,6 +140,9 @@ double bonding_degree(double temperature_slave, double solidus_slave, double tem
 // carrying about 1.3 GPa (MODEL.md, "Bonding"). Our choice.
 double bonding_degree_at_gap(double temperature_slave, double solidus_slave, double temperature_master,
                              double solidus_master, double band, double gap, double bonding_gap);
+// Film breakdown degree φ ∈ [0, 1] at the temperatures of the two sides (°C): S(x) of
+// the hotter side between T_start and T_end (T_end > T_start), C¹ in T_hot.
+double film_breakdown_degree(double temperature_slave, double temperature_master, double start, double end);
 // Conductance of a point with bonding degree β: the contact's film resistance fades
 // with 1 − β in series with the bonded layer, h = 1/((1 − β)/h_contact + β/h_bonded);
 // β = 0 gives h_contact, β = 1 h_bonded, h_contact = 0 (open) gives 0 below β = 1.
@@ -152,10 +170,12 @@ struct Conductance {
 };
 
 // Bay–Wanheim h_e between material a at T_a and material b at T_b (°C), normal stress
-// σ_n. The min() choosing the softer side is only C⁰ where the two yield curves cross.
+// σ_n, with the film broken down to degree φ (ρ_c (1 − φ) in place of ρ_c; φ is a
+// history, so the temperature derivatives do not include it). The min() choosing the
+// softer side is only C⁰ where the two yield curves cross.
 Conductance electrical_contact_conductance(const materials::Material& a, const materials::Material& b,
                                            double normal_stress, double temperature_a, double temperature_b,
-                                           const InterfaceProperties& properties);
+                                           const InterfaceProperties& properties, double film_breakdown = 0.0);
 // Simufact HTC between material a at T_a and b at T_b, normal stress F_n (no closure factor).
 Conductance thermal_contact_conductance(const materials::Material& a, const materials::Material& b,
                                         double normal_stress, double temperature_a, double temperature_b,
@@ -179,11 +199,13 @@ struct ContactState {
   std::vector<std::vector<double>> pressure;  // per interface, per pairing point
 };
 
-// Bonding degree β per pairing point of every interface: history, never decreasing.
-class BondingState {
+// The history of every pairing point of every interface, committed after a converged
+// step and never decreasing: the bonding degree β (interfaces that bond) and the film
+// breakdown degree φ (film_breakdown_degree).
+class InterfaceHistory {
  public:
-  BondingState() = default;
-  explicit BondingState(const std::vector<InterfacePairing>& pairings);
+  InterfaceHistory() = default;
+  explicit InterfaceHistory(const std::vector<InterfacePairing>& pairings);
 
   bool empty() const { return degree_.empty(); }
   int n_interfaces() const { return static_cast<int>(degree_.size()); }
@@ -193,9 +215,16 @@ class BondingState {
   void raise(int interface, int point, double value);
   void bond(int interface, int point) { raise(interface, point, 1.0); }
   int n_bonded(int interface) const;  // points with β = 1
+  // φ of the point's coating film (0 intact, 1 gone).
+  double breakdown(int interface, int point) const {
+    return breakdown_.empty() ? 0.0 : breakdown_[interface][point];
+  }
+  // φ ← max(φ, value), at most 1.
+  void raise_breakdown(int interface, int point, double value);
 
  private:
   std::vector<std::vector<double>> degree_;
+  std::vector<std::vector<double>> breakdown_;
 };
 
 // Length of every slave face of a pairing in the undeformed mesh (h_local of the

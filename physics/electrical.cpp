@@ -158,8 +158,8 @@ struct Electrical::Impl {
   }
 
   // h_e at every pairing point (0 where unpaired, open or outside the pattern).
-  void interface_conductances(const contact::BondingState& bonding, std::vector<std::vector<double>>& out) const {
-    interfaces.conductances(contact::InterfaceField::electrical, *contact, bonding, *temperature, node_material, out);
+  void interface_conductances(const contact::InterfaceHistory& history, std::vector<std::vector<double>>& out) const {
+    interfaces.conductances(contact::InterfaceField::electrical, *contact, history, *temperature, node_material, out);
   }
 
   // Every body must reach the ground body through conducting interface points.
@@ -234,7 +234,7 @@ int Electrical::n_gauss() const { return impl_->settings.n_gauss; }
 const ElectricalSolution& Electrical::solve(const std::vector<fem::Point>& positions,
                                             const Eigen::VectorXd& nodal_temperature, double current,
                                             const contact::ContactState& contact,
-                                            const contact::BondingState& bonding) {
+                                            const contact::InterfaceHistory& history) {
   Impl& m = *impl_;
   const fem::Mesh& mesh = m.mesh;
   if (static_cast<int>(positions.size()) != mesh.n_nodes() || nodal_temperature.size() != mesh.n_nodes())
@@ -244,7 +244,7 @@ const ElectricalSolution& Electrical::solve(const std::vector<fem::Point>& posit
   m.temperature = &nodal_temperature;
   m.contact = &contact;
   ElectricalSolution& sol = solution_;
-  m.interface_conductances(bonding, sol.interface_conductance);
+  m.interface_conductances(history, sol.interface_conductance);
   m.check_current_path(sol.interface_conductance);
 
   // Unit current: the load 1 A on the voltage dof.

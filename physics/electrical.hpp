@@ -110,11 +110,11 @@ class Electrical {
   ~Electrical();
 
   // Solves for the node positions, nodal temperatures (°C), current I (A), contact
-  // state and bonded points (an empty BondingState: none). Throws
+  // state and interface history (bonding, film breakdown; an empty one: none). Throws
   // std::runtime_error if a body has no conducting path (no closed contact).
   const ElectricalSolution& solve(const std::vector<fem::Point>& positions, const Eigen::VectorXd& nodal_temperature,
                                   double current, const contact::ContactState& contact,
-                                  const contact::BondingState& bonding = {});
+                                  const contact::InterfaceHistory& history = {});
   const ElectricalSolution& solution() const { return solution_; }
 
   // Per cell, from the last solve: Joule heat (volume average, W/m³) and current

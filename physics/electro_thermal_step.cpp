@@ -21,7 +21,7 @@ bool ElectroThermalStep::evaluate(const Eigen::VectorXd& T_in, Eigen::VectorXd& 
   if (current_ != 0.0) {
     clock_.start("electrical");
     try {
-      const auto& sol = electrical_.solve(*positions_, T_in, current_, *contact_, thermal_.bonding());
+      const auto& sol = electrical_.solve(*positions_, T_in, current_, *contact_, thermal_.interface_history());
       joule = sol.joule_heat;
       interface_heat = sol.interface_heat;
     } catch (const std::exception& e) {

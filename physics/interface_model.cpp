@@ -14,6 +14,9 @@ contact::FilmContactConstants film_constants(const ContactParameters& p) {
   c.thermal = {p.htc_p2, p.htc_p3, p.htc_p4};
   c.bonding_band = p.bonding_band;
   c.bonding_gap = p.bonding_gap;
+  c.film_breakdown = p.film_breakdown;
+  c.film_breakdown_start = p.film_breakdown_start;
+  c.film_breakdown_end = p.film_breakdown_end;
   return c;
 }
 

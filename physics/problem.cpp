@@ -230,6 +230,19 @@ void declare_contact(ConfigSchema& s) {
            "multiplied by a factor of its gap that falls smoothly (C1) from 1 at zero gap to 0 "
            "at this gap, so sheets that have parted beside the contact do not bond across the "
            "opening. Our choice, of the order of the surface roughness.");
+  s.boolean("contact.film_breakdown").default_value(film.film_breakdown ? "true" : "false")
+      .doc("The coating term rho_c of eq. 1 fades as the interface heats, as measured contact "
+           "resistances of steel do: times 1 - phi, phi rising smoothly from 0 at "
+           "film_breakdown_start to 1 at film_breakdown_end of the hotter side's temperature, "
+           "never falling. false: rho_c constant (eq. 1 as written).");
+  s.number("contact.film_breakdown_start", "degC", "degC")
+      .default_value(plain(film.film_breakdown_start) + " degC")
+      .range(Range::closed(-50, 1500))
+      .doc("Where the film starts to break down (our choice, as is the end).");
+  s.number("contact.film_breakdown_end", "degC", "degC")
+      .default_value(plain(film.film_breakdown_end) + " degC")
+      .range(Range::closed(-50, 1500))
+      .doc("Where the film is gone; above film_breakdown_start.");
 }
 
 void declare_thermal(ConfigSchema& s) {
@@ -620,6 +633,12 @@ Problem make_problem(const Config& config) {
   problem.contact.friction_coefficient = config.number("contact.friction_coefficient");
   problem.contact.bonding_band = config.number("contact.bonding_band");
   problem.contact.bonding_gap = config.number("contact.bonding_gap");
+  problem.contact.film_breakdown = config.boolean("contact.film_breakdown");
+  problem.contact.film_breakdown_start = config.number("contact.film_breakdown_start");
+  problem.contact.film_breakdown_end = config.number("contact.film_breakdown_end");
+  if (!(problem.contact.film_breakdown_end > problem.contact.film_breakdown_start))
+    config.fail("contact.film_breakdown_end", "must lie above contact.film_breakdown_start (" +
+                                                  plain(problem.contact.film_breakdown_start) + " degC)");
 
   ThermalParameters& thermal = problem.thermal;
   thermal.initial_temperature = config.number("thermal.initial_temperature");

@@ -55,6 +55,9 @@ struct ContactParameters {
   double friction_coefficient{};     // -, Coulomb mu
   double bonding_band{};             // K, S/S bonding degree rises over this much below the solidus (0: at once)
   double bonding_gap{};              // m, S/S points farther apart than this do not bond
+  bool film_breakdown{};             // rho_c fades with the film breakdown degree
+  double film_breakdown_start{};     // degC, the film starts to break down (hotter side)
+  double film_breakdown_end{};       // degC, the film is gone
 };
 
 struct ThermalParameters {

@@ -85,7 +85,7 @@ struct Thermal::Impl {
   std::vector<double> table_conductivity_q;
   bool new_step = true;
   bool start_given = false;            // set_start() before the next solve
-  contact::BondingState bonding, trial_bonding;
+  contact::InterfaceHistory history, trial_history;
   std::vector<std::vector<double>> conductance;  // per pairing point, last evaluation
   fem::CellGeometry geometry;                    // of the configuration of the last solve
   const fem::Mesh& current = geometry.current();
@@ -143,8 +143,8 @@ struct Thermal::Impl {
 
     for (const auto& pairing : pairings) conductance.emplace_back(pairing.points().size(), 0.0);
     assembler = std::make_unique<fem::Assembler>(mesh, dofs, constraints, interfaces.dof_groups());
-    bonding = contact::BondingState(pairings);
-    trial_bonding = bonding;
+    history = contact::InterfaceHistory(pairings);
+    trial_history = history;
 
     // Lumped capacity on the undeformed mesh: M_a = ∫ ρ_0 N_a dV_0.
     cell_mass.assign(4 * static_cast<std::size_t>(mesh.n_cells()), 0.0);
@@ -345,7 +345,7 @@ struct Thermal::Impl {
   // falls to the strength floor) and the table kinks of σ_d and k would make Newton
   // cycle; like σ(T) of the electrical field it is updated by the staggered coupling.
   void interface_conductances() {
-    interfaces.conductances(contact::InterfaceField::thermal, *contact, bonding, T, node_material, conductance);
+    interfaces.conductances(contact::InterfaceField::thermal, *contact, history, T, node_material, conductance);
   }
 
   // Thermal contact and interface heat at the points of one slave face:
@@ -473,16 +473,19 @@ struct Thermal::Impl {
     return fixed_weight.dot(R);
   }
 
-  void update_bonding() {
-    trial_bonding = bonding;
+  // The trial history from the step's temperatures: each paired point's bonding degree
+  // (laws that bond) and film breakdown degree, each the largest value reached.
+  void update_history() {
+    trial_history = history;
     for (std::size_t p = 0; p < pairings.size(); ++p) {
       const contact::InterfaceLaw& law = interfaces.law(p);
-      if (!law.bonds()) continue;
       const auto& points = (*contact->pairings)[p].points();
       for (std::size_t i = 0; i < points.size(); ++i) {
-        if (!points[i].paired || trial_bonding.bonded(static_cast<int>(p), static_cast<int>(i))) continue;
-        trial_bonding.raise(static_cast<int>(p), static_cast<int>(i),
-                            law.bonding_degree(interfaces.point(*contact, bonding, p, i, T, node_material)));
+        if (!points[i].paired) continue;
+        const int ip = static_cast<int>(p), ii = static_cast<int>(i);
+        const contact::InterfacePoint pt = interfaces.point(*contact, history, p, i, T, node_material);
+        trial_history.raise_breakdown(ip, ii, law.film_breakdown_degree(pt));
+        if (law.bonds() && !trial_history.bonded(ip, ii)) trial_history.raise(ip, ii, law.bonding_degree(pt));
       }
     }
   }
@@ -609,7 +612,7 @@ ThermalStepReport Thermal::solve(double dt, const std::vector<fem::Point>& posit
     report.message = "Newton did not converge in " + std::to_string(m.settings.max_iterations) +
                      " iterations (last correction " + std::to_string(report.correction) + " K)";
   m.account();
-  m.update_bonding();
+  m.update_history();
   return report;
 }
 
@@ -636,7 +639,7 @@ void Thermal::commit() {
   m.T_old = m.T;
   m.peak = m.peak.cwiseMax(m.T);
   for (int n = 0; n < m.mesh.n_nodes(); ++n) m.H_old[n] = m.node_material[n]->enthalpy(m.T_old[n]).value;
-  m.bonding = m.trial_bonding;
+  m.history = m.trial_history;
   m.new_step = true;
   m.factorized = false;
 }
@@ -690,7 +693,7 @@ Eigen::VectorXd Thermal::free_values(const Eigen::VectorXd& nodal_temperature) c
 Eigen::VectorXd Thermal::nodal_values(const Eigen::VectorXd& free) const {
   return impl_->constraints.distribute(free);
 }
-const contact::BondingState& Thermal::bonding() const { return impl_->bonding; }
+const contact::InterfaceHistory& Thermal::interface_history() const { return impl_->history; }
 const std::vector<std::vector<double>>& Thermal::interface_conductance() const { return impl_->conductance; }
 
 }  // namespace rsw::physics

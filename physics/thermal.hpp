@@ -206,7 +206,7 @@ class Thermal {
   Eigen::VectorXd liquid_fraction() const;               // of temperature()
   const ThermalEnergy& energy() const;                   // of the last solve
   ThermalSolverCounts solver_counts() const;             // summed over the run
-  const contact::BondingState& bonding() const;          // committed
+  const contact::InterfaceHistory& interface_history() const;  // committed β and φ
   // h at every pairing point of the last solve (HTC·χ, or bonded), W/(m²K).
   const std::vector<std::vector<double>>& interface_conductance() const;
 

@@ -384,7 +384,7 @@ void WeldDriver::update_bonding(const Eigen::VectorXd& T) {
   // step's temperatures) never decreases, and the mechanics ties the point with the
   // share β of its traction from this step on (Mechanics::set_bonding_degree), so
   // molten sheets never meet across a frictionless contact.
-  const auto& bonding = thermal_->bonding();
+  const auto& bonding = thermal_->interface_history();
   const auto& pairings = mech_->pairings();
   std::vector<std::vector<double>> degree(pairings.size());
   for (std::size_t p = 0; p < pairings.size(); ++p) {

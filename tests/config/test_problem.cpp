@@ -234,6 +234,21 @@ TEST(Problem, EarlyPhaseHasItsOwnLargestStepAndEndsOnAStep) {
             times.end());
 }
 
+// The film breaks down over a band of the hotter side's temperature: 20-700 degC
+// and switched on by default; a band that ends below its start is refused by key.
+TEST(Problem, FilmBreakdownBandDefaultsAndAnInvertedBandIsRejected) {
+  const Problem p = load_problem(paper_case);
+  EXPECT_TRUE(p.contact.film_breakdown);
+  EXPECT_DOUBLE_EQ(p.contact.film_breakdown_start, 20.0);
+  EXPECT_DOUBLE_EQ(p.contact.film_breakdown_end, 700.0);
+  EXPECT_FALSE(load_problem(paper_case, {"contact.film_breakdown=false"}).contact.film_breakdown);
+  const std::string message = error_of([] {
+    load_problem(paper_case, {"contact.film_breakdown_start=800 degC", "contact.film_breakdown_end=700 degC"});
+  });
+  EXPECT_HAS(message, "contact.film_breakdown_end");
+  EXPECT_HAS(message, "contact.film_breakdown_start");
+}
+
 TEST(Problem, EarlyStepLongerThanTheStepIsRejectedNamingBoth) {
   const std::string message = error_of([] {
     load_problem(paper_case, {"solver.early_time_step=1 ms", "solver.time_step=0.5 ms", "solver.early_phase_end=20 ms"});

@@ -177,7 +177,7 @@ TEST(ElectricalContact, NearlyRigidBondedInterfaceSolvesToRoundOffOfItsBackwardE
   std::vector<contact::InterfacePairing> pairings;
   pairings.emplace_back(mesh, "contact", 2);
   const auto contact = fixed_contact(pairings, [](const std::string&, const fem::Point&) { return 80e6; });
-  contact::BondingState bonding(pairings);
+  contact::InterfaceHistory bonding(pairings);
   for (std::size_t i = 0; i < pairings[0].points().size(); ++i) bonding.bond(0, static_cast<int>(i));
   const Eigen::VectorXd T = Eigen::VectorXd::Constant(mesh.n_nodes(), 20.0);
   const auto& sol = electrical.solve(mesh.nodes, T, current, contact, bonding);
@@ -245,7 +245,7 @@ TEST(ElectricalVerification, CurrentIsConservedThroughEveryInterfaceOfTheWeldSta
     const double a = mesh.interfaces.at(name).kind == meshes::interface_kind::electrode_sheet ? 2.5e-3 : 3e-3;
     return 300e6 * std::max(0.0, 1 - std::pow(x.x() / a, 2));
   });
-  contact::BondingState bonding(pairings);
+  contact::InterfaceHistory bonding(pairings);
   int p_ss = 0;
   for (const auto& [name, pair] : mesh.interfaces) {
     if (pair.kind == meshes::interface_kind::sheet_sheet) break;

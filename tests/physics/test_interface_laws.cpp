@@ -251,6 +251,52 @@ TEST(InterfaceLaws, SheetsBondOnlyWhereTheyTouch) {
   EXPECT_LT(contact::bonding_degree_at_gap(sol, sol, sol, sol, band, gb - h, gb) / h, 1e-4 / gb);
 }
 
+// φ = S(x), x = (T_hot − T_start)/(T_end − T_start), S = 3x² − 2x³: 0 up to T_start,
+// S(1/4) = 5/32 and S(1/2) = 1/2 inside, 1 from T_end on; the hotter side rules,
+// whichever it is; C¹ at both ends (one-sided differences vanish with the step).
+TEST(InterfaceLaws, FilmBreakdownDegreeRisesSmoothlyWithTheHotterSidesTemperature) {
+  const double start = 20, end = 700;
+  EXPECT_EQ(contact::film_breakdown_degree(20, 15, start, end), 0.0);
+  EXPECT_EQ(contact::film_breakdown_degree(-10, 0, start, end), 0.0);
+  EXPECT_NEAR(contact::film_breakdown_degree(190, 40, start, end), 5.0 / 32, 1e-15);
+  EXPECT_NEAR(contact::film_breakdown_degree(40, 190, start, end), 5.0 / 32, 1e-15);
+  EXPECT_NEAR(contact::film_breakdown_degree(360, 360, start, end), 0.5, 1e-15);
+  EXPECT_EQ(contact::film_breakdown_degree(700, 20, start, end), 1.0);
+  EXPECT_EQ(contact::film_breakdown_degree(20, 1500, start, end), 1.0);
+  const double h = 1e-4;  // K
+  EXPECT_LT(contact::film_breakdown_degree(start + h, 0, start, end) / h, 1e-5);
+  EXPECT_LT((1 - contact::film_breakdown_degree(end - h, 0, start, end)) / h, 1e-5);
+  // inside the band the slope is S'(x)/(T_end − T_start), S' = 6x(1 − x)
+  const auto phi = [&](double T) { return contact::film_breakdown_degree(T, 0, start, end); };
+  EXPECT_NEAR(central_difference(phi, 190.0, 1e-3), 6 * 0.25 * 0.75 / (end - start), 1e-9);
+}
+
+// The history keeps the largest breakdown degree reached, at most 1, per point and
+// apart from the bonding degree.
+TEST(InterfaceLaws, InterfaceHistoryKeepsTheLargestBreakdownDegree) {
+  std::vector<contact::InterfacePairing> none;
+  contact::InterfaceHistory empty(none);
+  EXPECT_EQ(empty.breakdown(0, 0), 0.0);  // no interfaces: nothing broken
+  materials::MaterialLibrary library;
+  fem::Mesh mesh;
+  {
+    const physics::Problem problem = physics::make_problem(fem::Config(physics::weld_case_schema()));
+    mesh = meshes::weld_mesh(problem.geometry, problem.mesh);
+  }
+  std::vector<contact::InterfacePairing> pairings;
+  for (const auto& [name, pair] : mesh.interfaces) pairings.emplace_back(mesh, name, 2);
+  contact::InterfaceHistory history(pairings);
+  history.raise_breakdown(0, 3, 0.3);
+  history.raise_breakdown(0, 3, 0.1);
+  EXPECT_EQ(history.breakdown(0, 3), 0.3);
+  history.raise_breakdown(0, 3, 2.0);
+  EXPECT_EQ(history.breakdown(0, 3), 1.0);
+  EXPECT_EQ(history.breakdown(0, 2), 0.0);
+  EXPECT_EQ(history.degree(0, 3), 0.0);
+  history.raise(0, 2, 0.4);
+  EXPECT_EQ(history.breakdown(0, 2), 0.0);
+}
+
 // A partly bonded point: the film's resistance weighted by 1 − β in series with the
 // bonded layer's, h = 1/((1 − β)/h_c + β/h_b).
 TEST(InterfaceLaws, PartlyBondedConductanceIsTheFadingFilmInSeriesWithTheBondedLayer) {
@@ -294,6 +340,38 @@ TEST(FilmContactLaw, ClosedPointConductsByPaperEquationsOneAndTwo) {
   pt.gap = 1e-6;
   EXPECT_EQ(law.electrical_conductance(pt), 0.0);
   EXPECT_EQ(law.thermal_conductance(pt), 0.0);
+}
+
+// A broken film leaves eq. 1's constriction term alone: at breakdown degree φ the
+// coating term is ρ_c (1 − φ), by hand at φ = 1/2 and 1; the law reports the degree of
+// contact::film_breakdown_degree over the default band (20–700 °C), and none when the
+// breakdown is switched off.
+TEST(FilmContactLaw, BrokenFilmLeavesTheConstrictionTermOfEquationOne) {
+  materials::MaterialLibrary library;
+  const auto copper = library.load("CuCrZr");
+  const auto steel = library.load("DP1200");
+  const contact::FilmContactLaw law({"es", 1e-5, 5e-6, 1e-2, false});
+  contact::InterfacePoint pt;
+  pt.slave = &copper;
+  pt.master = &steel;
+  pt.slave_temperature = 455.0;
+  pt.master_temperature = 655.0;
+  pt.pressure = 200e6;
+  pt.gap = -1e-7;
+  const double soft = std::min(copper.yield_stress(0, 455.0).yield_stress, steel.yield_stress(0, 655.0).yield_stress);
+  const double rho_bar =
+      0.5 * (copper.electrical_resistivity(455.0).value + steel.electrical_resistivity(655.0).value);
+  const double constriction = 3 * soft / 200e6 * rho_bar;
+  for (const double phi : {0.5, 1.0}) {
+    pt.film_breakdown = phi;
+    const double h_e = 1 / ((constriction + 5e-6 * (1 - phi)) * 1e-5);
+    EXPECT_NEAR(law.electrical_conductance(pt), h_e, 1e-12 * h_e) << phi;
+  }
+  EXPECT_EQ(law.film_breakdown_degree(pt), contact::film_breakdown_degree(455.0, 655.0, 20, 700));
+  EXPECT_GT(law.film_breakdown_degree(pt), 0.9);
+  contact::FilmContactConstants off;
+  off.film_breakdown = false;
+  EXPECT_EQ(contact::FilmContactLaw({"es", 1e-5, 5e-6, 1e-2, false}, off).film_breakdown_degree(pt), 0.0);
 }
 
 // A fully bonded point conducts like the bonded layer, F (k_s + k_m)/h_local, for

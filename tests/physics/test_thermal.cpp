@@ -417,7 +417,7 @@ TEST(ThermalVerification, EnergyIsConservedThroughMeltingAndBonding) {
     int newton = 0, steps = 0;
     while (steps < 40) {
       for (int it = 0; it < 3; ++it) {
-        const auto& sol = electrical.solve(mesh.nodes, thermal.temperature(), current, contact, thermal.bonding());
+        const auto& sol = electrical.solve(mesh.nodes, thermal.temperature(), current, contact, thermal.interface_history());
         const auto report = thermal.solve(dt, mesh.nodes, contact, sol.joule_heat, sol.interface_heat);
         ASSERT_TRUE(report.converged) << "band " << band << " K, step " << steps << ": " << report.message;
         newton += report.iterations;
@@ -430,7 +430,7 @@ TEST(ThermalVerification, EnergyIsConservedThroughMeltingAndBonding) {
       removed += E.removed();
       thermal.commit();
       ++steps;
-      if (thermal.liquid_fraction().maxCoeff() > 0.99 && thermal.bonding().n_bonded(0) > 4) break;
+      if (thermal.liquid_fraction().maxCoeff() > 0.99 && thermal.interface_history().n_bonded(0) > 4) break;
     }
     const Eigen::VectorXd f = thermal.liquid_fraction();
     const double latent = steel.density(20).value * steel.latent_heat() * volume.dot(f);
@@ -438,12 +438,73 @@ TEST(ThermalVerification, EnergyIsConservedThroughMeltingAndBonding) {
                 "int V I dt = %.4f J, stored %.4f J (latent %.4f J), removed %.4f J, worst step imbalance %.1e; "
                 "%d of %zu S/S points bonded, peak T %.1f degC\n",
                 band, steps, double(newton) / (3 * steps), electrical_energy, stored, latent, removed, worst,
-                thermal.bonding().n_bonded(0), pairings[0].points().size(), thermal.peak_temperature().maxCoeff());
+                thermal.interface_history().n_bonded(0), pairings[0].points().size(), thermal.peak_temperature().maxCoeff());
     EXPECT_LT(worst, 1e-7);
     EXPECT_NEAR(stored + removed, electrical_energy, 1e-8 * electrical_energy);
     EXPECT_GT(f.maxCoeff(), 0.99);
-    EXPECT_GT(thermal.bonding().n_bonded(0), 0);
+    EXPECT_GT(thermal.interface_history().n_bonded(0), 0);
     EXPECT_GT(latent, 0.05 * stored);
+  }
+}
+
+// A broken film stays broken: two DP1200 discs with a resistive S/S film held at
+// uniform temperatures step by step. The committed breakdown degree of every paired
+// point follows φ of the hottest state so far (S(1/2) = 1/2 at 360 °C over the
+// default 20–700 °C band) and keeps it when the discs are colder again; with φ = 1 the
+// interface conducts current like a law without the coating term at the same state.
+TEST(ThermalVerification, FilmBreakdownFollowsTheHottestStateAndStaysOnCooling) {
+  materials::MaterialLibrary library;
+  const auto steel = library.load("DP1200");
+  const double R = 0.5e-3, t = 0.5e-3;
+  fem::Mesh mesh = test::block_mesh("sheet_2", 0, R, -t, 0, t / 4);
+  mesh.append(test::block_mesh("sheet_1", 0, R, 0, t, t / 4));
+  mesh.interfaces["ss_1_2"] = {"sheet_1.bottom", "sheet_2.top", meshes::interface_kind::sheet_sheet};
+  const contact::InterfaceProperties film{"ss_1_2", 1e-5, 2e-5, 1e-3, false};
+  contact::InterfaceProperties bare = film;
+  bare.coating_resistivity = 0;
+  const std::vector<const materials::Material*> mats{&steel, &steel};
+  std::vector<contact::InterfacePairing> pairings;
+  pairings.emplace_back(mesh, "ss_1_2", 2);
+  const auto contact = fixed_contact(pairings, [](const std::string&, const fem::Point&) { return 50e6; });
+  physics::Thermal thermal(mesh, mats, contact::film_contact_model({film}), insulated(20.0));
+  const std::vector<double> no_heat(4 * mesh.n_cells(), 0.0);
+  const int n = static_cast<int>(pairings[0].points().size());
+  const auto hold = [&](double T) {
+    thermal.set_temperature(Eigen::VectorXd::Constant(mesh.n_nodes(), T));
+    const auto report = thermal.solve(0.5e-3, mesh.nodes, contact, no_heat, {});
+    ASSERT_TRUE(report.converged) << report.message;
+    thermal.commit();
+  };
+  const auto expect_degree = [&](double phi, const char* when) {
+    for (int i = 0; i < n; ++i) {
+      if (!pairings[0].points()[i].paired) continue;
+      EXPECT_NEAR(thermal.interface_history().breakdown(0, i), phi, 1e-12) << when;
+    }
+  };
+  hold(20.0);
+  expect_degree(0.0, "cold");
+  hold(360.0);
+  expect_degree(0.5, "at 360 degC");
+  hold(200.0);
+  expect_degree(0.5, "cooled to 200 degC");
+  hold(900.0);
+  expect_degree(1.0, "at 900 degC");
+  hold(20.0);
+  expect_degree(1.0, "cooled to 20 degC");
+
+  physics::ElectricalSettings es;
+  es.current_boundary = "sheet_1.top";
+  es.ground_boundary = "sheet_2.bottom";
+  physics::Electrical with_film(mesh, mats, contact::film_contact_model({film}), es);
+  physics::Electrical without_film(mesh, mats, contact::film_contact_model({bare}), es);
+  const auto broken = with_film.solve(mesh.nodes, thermal.temperature(), 800.0, contact, thermal.interface_history())
+                          .interface_conductance;
+  const auto expected = without_film.solve(mesh.nodes, thermal.temperature(), 800.0, contact).interface_conductance;
+  const auto intact = with_film.solve(mesh.nodes, thermal.temperature(), 800.0, contact).interface_conductance;
+  for (int i = 0; i < n; ++i) {
+    if (!pairings[0].points()[i].paired) continue;
+    EXPECT_NEAR(broken[0][i], expected[0][i], 1e-12 * expected[0][i]) << i;
+    EXPECT_LT(intact[0][i], 0.5 * expected[0][i]) << i;  // the intact film dominates at 20 degC
   }
 }
 
@@ -612,7 +673,7 @@ TEST(ThermalPerformance, WeldStackStepsConvergeAndBalanceEnergy) {
   for (int step = 0; step < 5; ++step) {
     for (int it = 0; it < 3; ++it) {
       auto t0 = std::chrono::steady_clock::now();
-      const auto& sol = electrical.solve(mesh.nodes, thermal.temperature(), 8e3, contact, thermal.bonding());
+      const auto& sol = electrical.solve(mesh.nodes, thermal.temperature(), 8e3, contact, thermal.interface_history());
       auto t1 = std::chrono::steady_clock::now();
       const auto report = thermal.solve(1e-3, mesh.nodes, contact, sol.joule_heat, sol.interface_heat);
       auto t2 = std::chrono::steady_clock::now();
@@ -635,6 +696,6 @@ TEST(ThermalPerformance, WeldStackStepsConvergeAndBalanceEnergy) {
               t_electrical / n_electrical, t_thermal / n_thermal, double(newton) / n_thermal,
               double(factorizations) / n_thermal,
               electrical.solution().resistance * 1e6, thermal.peak_temperature().maxCoeff(),
-              thermal.bonding().n_bonded(2), worst);
+              thermal.interface_history().n_bonded(2), worst);
   EXPECT_LT(worst, 1e-7);
 }
