@@ -28,6 +28,18 @@ template <class F>
 double central_difference(F&& f, double x, double d) {
   return (f(x + d) - f(x - d)) / (2 * d);
 }
+
+// A closed, unbonded E/S point: CuCrZr at 455 °C on DP1200 at 655 °C, 200 MPa.
+contact::InterfacePoint closed_es_point(const materials::Material& copper, const materials::Material& steel) {
+  contact::InterfacePoint pt;
+  pt.slave = &copper;
+  pt.master = &steel;
+  pt.slave_temperature = 455.0;
+  pt.master_temperature = 655.0;
+  pt.pressure = 200e6;
+  pt.gap = -1e-7;
+  return pt;
+}
 }  // namespace
 
 // Paper eq. 1 as printed: ρ = 3 (σ_soft/σ_n)(ρ_1 + ρ_2)/2 + ρ_c, h_e = 1/(ρ t_f).
@@ -318,13 +330,7 @@ TEST(FilmContactLaw, ClosedPointConductsByPaperEquationsOneAndTwo) {
   const auto steel = library.load("DP1200");
   const contact::InterfaceProperties props{"es", 1e-5, 5e-6, 1e-2, false};
   const contact::FilmContactLaw law(props);
-  contact::InterfacePoint pt;
-  pt.slave = &copper;
-  pt.master = &steel;
-  pt.slave_temperature = 455.0;
-  pt.master_temperature = 655.0;
-  pt.pressure = 200e6;
-  pt.gap = -1e-7;
+  contact::InterfacePoint pt = closed_es_point(copper, steel);
   const double soft = std::min(copper.yield_stress(0, 455.0).yield_stress, steel.yield_stress(0, 655.0).yield_stress);
   const double rho_bar =
       0.5 * (copper.electrical_resistivity(455.0).value + steel.electrical_resistivity(655.0).value);
@@ -351,13 +357,7 @@ TEST(FilmContactLaw, BrokenFilmLeavesTheConstrictionTermOfEquationOne) {
   const auto copper = library.load("CuCrZr");
   const auto steel = library.load("DP1200");
   const contact::FilmContactLaw law({"es", 1e-5, 5e-6, 1e-2, false});
-  contact::InterfacePoint pt;
-  pt.slave = &copper;
-  pt.master = &steel;
-  pt.slave_temperature = 455.0;
-  pt.master_temperature = 655.0;
-  pt.pressure = 200e6;
-  pt.gap = -1e-7;
+  contact::InterfacePoint pt = closed_es_point(copper, steel);
   const double soft = std::min(copper.yield_stress(0, 455.0).yield_stress, steel.yield_stress(0, 655.0).yield_stress);
   const double rho_bar =
       0.5 * (copper.electrical_resistivity(455.0).value + steel.electrical_resistivity(655.0).value);

@@ -93,6 +93,15 @@ physics::ThermalSettings insulated(double initial_temperature) {
   return s;
 }
 
+// Two discs of radius R and thickness t, sheet_2 below sheet_1, cells t/n_cells high,
+// joined by the sheet/sheet interface ss_1_2.
+fem::Mesh two_discs(double R, double t, int n_cells) {
+  fem::Mesh mesh = test::block_mesh("sheet_2", 0, R, -t, 0, t / n_cells);
+  mesh.append(test::block_mesh("sheet_1", 0, R, 0, t, t / n_cells));
+  mesh.interfaces["ss_1_2"] = {"sheet_1.bottom", "sheet_2.top", meshes::interface_kind::sheet_sheet};
+  return mesh;
+}
+
 // Lumped volume of every node, ∫ N_a dV on the undeformed mesh (m³).
 Eigen::VectorXd nodal_volume(const fem::Mesh& mesh) {
   Eigen::VectorXd v = Eigen::VectorXd::Zero(mesh.n_nodes());
@@ -390,9 +399,7 @@ TEST(ThermalVerification, EnergyIsConservedThroughMeltingAndBonding) {
   materials::MaterialLibrary library;
   const auto steel = library.load("DP1200");
   const double R = 0.5e-3, t = 0.5e-3, current = 800.0, dt = 0.5e-3;
-  fem::Mesh mesh = test::block_mesh("sheet_2", 0, R, -t, 0, t / 8);
-  mesh.append(test::block_mesh("sheet_1", 0, R, 0, t, t / 8));
-  mesh.interfaces["ss_1_2"] = {"sheet_1.bottom", "sheet_2.top", meshes::interface_kind::sheet_sheet};
+  const fem::Mesh mesh = two_discs(R, t, 8);
   const contact::InterfaceProperties props{"ss_1_2", 1e-5, 2e-5, 1e-3, true};
   const contact::InterfaceModel model = contact::film_contact_model({props});
   const std::vector<const materials::Material*> mats{&steel, &steel};
@@ -456,9 +463,7 @@ TEST(ThermalVerification, FilmBreakdownFollowsTheHottestStateAndStaysOnCooling) 
   materials::MaterialLibrary library;
   const auto steel = library.load("DP1200");
   const double R = 0.5e-3, t = 0.5e-3;
-  fem::Mesh mesh = test::block_mesh("sheet_2", 0, R, -t, 0, t / 4);
-  mesh.append(test::block_mesh("sheet_1", 0, R, 0, t, t / 4));
-  mesh.interfaces["ss_1_2"] = {"sheet_1.bottom", "sheet_2.top", meshes::interface_kind::sheet_sheet};
+  const fem::Mesh mesh = two_discs(R, t, 4);
   const contact::InterfaceProperties film{"ss_1_2", 1e-5, 2e-5, 1e-3, false};
   contact::InterfaceProperties bare = film;
   bare.coating_resistivity = 0;
@@ -515,9 +520,7 @@ TEST(ThermalNewton, TangentMatchesFiniteDifferences) {
   materials::MaterialLibrary library;
   const auto steel = library.load("DP1200");
   const double R = 0.5e-3, t = 0.5e-3;
-  fem::Mesh mesh = test::block_mesh("sheet_2", 0, R, -t, 0, t / 4);
-  mesh.append(test::block_mesh("sheet_1", 0, R, 0, t, t / 4));
-  mesh.interfaces["ss_1_2"] = {"sheet_1.bottom", "sheet_2.top", meshes::interface_kind::sheet_sheet};
+  const fem::Mesh mesh = two_discs(R, t, 4);
   const contact::InterfaceProperties props{"ss_1_2", 1e-5, 2e-5, 1e-3, true};
   const contact::InterfaceModel model = contact::film_contact_model({props});
   physics::ThermalSettings ts;
