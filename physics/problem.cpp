@@ -218,18 +218,16 @@ void declare_contact(ConfigSchema& s) {
       .doc("Coulomb friction coefficient on all contact interfaces; 0 is frictionless.");
   s.number("contact.bonding_band", "K", "K").default_value(plain(film.bonding_band) + " K")
       .range(Range::closed(0, 200))
-      .doc("Sheet/sheet points bond gradually as both sides approach their solidus: the "
-           "bonding degree rises smoothly (C1) from 0 at this much below the solidus to 1 at "
-           "it and never falls; the film resistance fades with it and the mechanics tie takes "
-           "its share of the traction. 0 bonds a point at once at the solidus, so R drops up "
-           "to 10 % in a step and outputs jump between neighbouring parameter values.");
+      .doc("Sheet/sheet points bond as both sides approach their solidus: the bonding "
+           "degree rises smoothly from 0 this far below the solidus to 1 at it, never falls, "
+           "fades the film and ties the mechanics. 0 bonds at once: R then drops up to 10 % "
+           "in a step.");
 
   s.number("contact.bonding_gap", "m", "um").default_value(micrometres(film.bonding_gap))
       .range(Range::open_closed(0, 1000))
-      .doc("Sheets fuse only where they touch: a sheet/sheet point's bonding degree is "
-           "multiplied by a factor of its gap that falls smoothly (C1) from 1 at zero gap to 0 "
-           "at this gap, so sheets that have parted beside the contact do not bond across the "
-           "opening. Our choice, of the order of the surface roughness.");
+      .doc("Sheets fuse only where they touch: the bonding degree falls smoothly to 0 at "
+           "this gap, so sheets parted beside the contact do not bond (our choice, of the "
+           "order of the surface roughness).");
   s.boolean("contact.film_breakdown").default_value(film.film_breakdown ? "true" : "false")
       .doc("The coating term rho_c of eq. 1 fades as the interface heats, as measured contact "
            "resistances of steel do: times 1 - phi, phi rising smoothly from 0 at "
