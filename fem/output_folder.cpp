@@ -94,6 +94,9 @@ void OutputFolder::check_and_mark() {
   std::vector<std::string> present, evidence;
   for (const auto& entry : fs::directory_iterator(folder_)) {
     const std::string name = entry.path().filename().string();
+    // A marker that appeared since the check above is another shared claim's (an MPI
+    // rank or array task that created it first): rsw's own, not a stranger's file.
+    if (name == marker_name) continue;
     present.push_back(name);
     for (const auto& e : options_.evidence)
       if (name == e) evidence.push_back(name);
