@@ -229,10 +229,9 @@ void declare_contact(ConfigSchema& s) {
            "this gap, so sheets parted beside the contact do not bond (our choice, of the "
            "order of the surface roughness).");
   s.boolean("contact.film_breakdown").default_value(film.film_breakdown ? "true" : "false")
-      .doc("The coating term rho_c of eq. 1 fades as the interface heats, as measured contact "
-           "resistances of steel do: times 1 - phi, phi rising smoothly from 0 at "
-           "film_breakdown_start to 1 at film_breakdown_end of the hotter side's temperature, "
-           "never falling. false: rho_c constant (eq. 1 as written).");
+      .doc("rho_c of eq. 1 times 1 - phi: phi rises smoothly from 0 at film_breakdown_start to "
+           "1 at film_breakdown_end of the hotter side's temperature and never falls, as films "
+           "break down (docs/MODEL.md). false: eq. 1 as written.");
   s.number("contact.film_breakdown_start", "degC", "degC")
       .default_value(plain(film.film_breakdown_start) + " degC")
       .range(Range::closed(-50, 1500))
