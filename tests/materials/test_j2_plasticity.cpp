@@ -207,7 +207,7 @@ TEST(J2, YieldConditionHoldsAfterReturn) {
   check_path(steel, 20);    // nonlinear hardening (piecewise-linear flow curve)
   check_path(steel, 650);   // between flow curves
   check_path(steel, 1445);  // inside the blend to the strength floor
-  check_path(steel, 1490);  // at the floor: perfectly plastic, sigma_y = 20 MPa
+  check_path(steel, 1490);  // at the floor: perfectly plastic, sigma_y = 5 MPa
 }
 
 TEST(J2, ConsistentTangentMatchesFiniteDifferences) {

@@ -153,7 +153,7 @@ TEST(MaterialLibrary, UnknownMaterialNamesSearchedDirectories) {
 TEST(MaterialLibrary, UserDirectoriesComeFirstAndShadowShippedFiles) {
   const ScratchDirectory user("env");
   const std::string shipped_text = read_text(shipped_directory + "/DP1200.yaml");
-  user.write("DP1200.yaml", replaced(shipped_text, "yield_stress: 20 MPa", "yield_stress: 7 MPa"));
+  user.write("DP1200.yaml", replaced(shipped_text, "yield_stress: 5 MPa", "yield_stress: 7 MPa"));
   // As the rsw program sets them from RSW_MATERIALS_PATH.
   MaterialLibrary::set_user_directories(split_path_list(user.path() + ":/nonexistent_rsw_dir"));
   const std::vector<std::string> directories = MaterialLibrary::default_directories();
@@ -297,7 +297,7 @@ TEST(Material, YieldStressReachesFloorAboveSolidusSmoothly) {
   const double t_s = steel.solidus();
   const double width = steel.strength_floor_transition();
   const double floor = steel.strength_floor();
-  EXPECT_DOUBLE_EQ(floor, 20e6);
+  EXPECT_DOUBLE_EQ(floor, 5e6);
   EXPECT_DOUBLE_EQ(width, 50.0);
   const FlowCurveTable& table = steel.data().flow_curves;
 

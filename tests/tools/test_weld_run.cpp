@@ -10,6 +10,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -570,11 +571,14 @@ TEST(WeldRun, FoldedCellFailsTheRunSayingWhereAndWhen) {
             0);
   const std::string failure = failure_reason(dir);
   EXPECT_NE(failure.find("the deformed mesh has folded: cell"), std::string::npos) << failure;
-  // where: a cell of sheet_1 at the edge of the bonded region, r ≈ 2 mm
+  // where: a sheet cell at the edge of the bonded region, r ≈ 2 mm (the stack is
+  // symmetric about the interface, so which sheet folds first is round-off)
   double r = 0, z = 0;
-  const auto at = failure.find("of sheet_1 at (r, z) = (");
+  int sheet = 0;
+  const auto at = failure.find("of sheet_");
   ASSERT_NE(at, std::string::npos) << failure;
-  ASSERT_EQ(std::sscanf(failure.c_str() + at, "of sheet_1 at (r, z) = (%lf, %lf)", &r, &z), 2) << failure;
+  ASSERT_EQ(std::sscanf(failure.c_str() + at, "of sheet_%d at (r, z) = (%lf, %lf)", &sheet, &r, &z), 3) << failure;
+  EXPECT_TRUE(sheet == 1 || sheet == 2) << failure;
   EXPECT_GT(r, 1.9) << failure;
   EXPECT_LT(r, 2.1) << failure;
   // when: with uniform 1 ms steps, weld step n ends at n ms
@@ -681,4 +685,42 @@ TEST(WeldRun, FeaturesReadTheSimulatedSignalFile) {
   ASSERT_EQ(run_rsw("features " + (coarse_run() / "signals.csv").string(), out), 0) << out;
   EXPECT_NE(out.find("R_beta"), std::string::npos) << out;
   EXPECT_NE(out.find("dS_P"), std::string::npos) << out;
+}
+
+// The melt's numerical regularisation (docs/MECHANICS.md, "Rate dependence";
+// materials/data/DP1200.yaml): the sheet steel's strength floor and its viscosity at the
+// solidus stand in for a liquid that has neither. The displacement signal must not
+// depend on them: with the shipped 5 MPa and 0.3 MPa·s, the peak expansion and the final
+// displacement of the coarse weld stay within 5 % of a copy with 2 MPa and 0.01 MPa·s
+// (validation/melt_regularisation/README.md; 20 MPa and 1 MPa·s were 11 % off).
+TEST(WeldRun, DisplacementWithinFivePercentOfItsValueWithoutMeltRegularisation) {
+  const fs::path base = fs::temp_directory_path() / ("rsw_melt_reg_" + std::to_string(::getpid()));
+  fs::remove_all(base);
+  fs::create_directories(base / "materials");
+  std::ifstream in(std::string(RSW_SOURCE_DIR) + "/materials/data/DP1200.yaml");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto replace_once = [&text](const std::string& from, const std::string& to) {
+    const auto at = text.find(from);
+    ASSERT_NE(at, std::string::npos) << "DP1200.yaml no longer holds '" << from << "'";
+    ASSERT_EQ(text.find(from, at + 1), std::string::npos) << "'" << from << "' twice in DP1200.yaml";
+    text.replace(at, from.size(), to);
+  };
+  replace_once("\nname: DP1200\n", "\nname: DP1200_unregularised\n");
+  replace_once("\n  yield_stress: 5 MPa\n", "\n  yield_stress: 2 MPa\n");
+  replace_once("\n    - [1470 degC, 0.3 MPa*s]\n", "\n    - [1470 degC, 0.01 MPa*s]\n");
+  std::ofstream(base / "materials" / "DP1200_unregularised.yaml") << text;
+
+  const auto shipped = coarse_features(base / "shipped", "");
+  ASSERT_EQ(::setenv("RSW_MATERIALS_PATH", (base / "materials").c_str(), 1), 0);
+  const auto limit = coarse_features(base / "unregularised",
+                                     " --set 'stack.sheets=[{material: DP1200_unregularised, thickness: 1.0 mm}, "
+                                     "{material: DP1200_unregularised, thickness: 1.0 mm}]'");
+  ::unsetenv("RSW_MATERIALS_PATH");
+  for (const char* name : {"dS_P", "S_end"}) {
+    const double a = shipped.at(name).at("value").get<double>(), b = limit.at(name).at("value").get<double>();
+    std::printf("%s: %.2f um shipped, %.2f um without regularisation (%+.1f %%)\n", name, a * 1e6, b * 1e6,
+                100 * (a / b - 1));
+    EXPECT_LT(std::abs(a / b - 1), 0.05) << name;
+  }
+  fs::remove_all(base);
 }
