@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # The paper's Fig. 6 diagnostic (docs/VERIFICATION.md) over the whole P1 prior: the paper's case
 # on the coarse mesh at N values of log10 P1 evenly spaced over [-3, -1] (the E/S HTC
-# constant's prior, Table I), the signal features of each run (`rsw features`), and
-# for each feature the residual after detrending — a least-squares polynomial of
-# degree D in log10 P1 — relative to the feature's range over the sweep. Noise shows
+# constant's prior, Table I), the signal features of each run (`rsw features`) and the
+# nugget and imprint features of its summary.json, and for each feature the residual
+# after detrending — a least-squares polynomial of degree D in log10 P1 — relative to the feature's range over the sweep. Noise shows
 # as residuals that do not shrink when D grows; a smooth trend's residual falls
 # quickly with D.
 #   bash validation/smoothness/prior_sweep.sh [N=40] [D=6] [extra --set options]
@@ -44,7 +44,11 @@ for k in range(n):
     data = json.load(open(path))
     data = data.get("features", data)
     x.append(-3 + 2 * k / (n - 1))
-    rows.append({name: entry["value"] for name, entry in data.items()})
+    row = {name: entry["value"] for name, entry in data.items()}
+    # the nugget and imprint features of the run's summary (the calibration targets)
+    nugget = json.load(open(f"{out}/run{k}/summary.json"))["nugget"]
+    row.update({name: nugget[name] for name in ("d_n_liq", "h_n_liq", "d_n_sol", "h_n_sol", "w_elec", "d_indent")})
+    rows.append(row)
 x = np.array(x)
 if table:
     with open(table, "w", newline="") as f:
