@@ -22,10 +22,16 @@ FilmContactLaw::FilmContactLaw(const InterfaceProperties& properties, const Film
 
 double FilmContactLaw::electrical_conductance(const InterfacePoint& pt) const {
   double h_contact = 0;
-  if (pt.bonding_degree < 1 && pt.pressure > 0)
+  if (pt.bonding_degree < 1 && pt.pressure > 0) {
+    Conductance bulk;
+    if (constants_.film_replaces_bulk)
+      bulk = bonded_electrical_conductance(*pt.slave, *pt.master, pt.slave_temperature, pt.master_temperature,
+                                           pt.face_length, constants_.bonded_factor);
     h_contact = electrical_contact_conductance(*pt.slave, *pt.master, pt.pressure, pt.slave_temperature,
-                                               pt.master_temperature, properties_, pt.film_breakdown)
+                                               pt.master_temperature, properties_, pt.film_breakdown,
+                                               constants_.film_replaces_bulk ? &bulk : nullptr)
                     .value;
+  }
   return with_bonding(h_contact, pt, bonded_electrical_conductance, constants_.bonded_factor);
 }
 

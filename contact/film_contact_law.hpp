@@ -9,6 +9,9 @@
 //   h = 1/((1 − β)/h_contact + β/h_bonded),   β = S(x) χ(g; g_b)  (bonding_degree_at_gap).
 // The coating term ρ_c of h_e fades with the film's committed breakdown degree φ
 // (film_breakdown_degree of the hotter side's temperature; off: φ = 0).
+// The film replaces bulk (film_replaces_bulk, default): the interface adds only the
+// constriction resistance in excess of the bulk layer of thickness t_f that the mesh
+// already holds, in series with the bonded conductance (bay_wanheim_excess_conductance).
 // Each side's properties at its own temperature. Units: Pa, m, °C, Ω·m, W/(m·K).
 #pragma once
 
@@ -31,6 +34,7 @@ struct FilmContactConstants {
   bool film_breakdown = true;       // ρ_c fades with the film breakdown degree φ
   double film_breakdown_start = 20;  // °C, T_start of film_breakdown_degree
   double film_breakdown_end = 700;   // °C, T_end: the film is gone
+  bool film_replaces_bulk = true;    // h_e adds only the resistance in excess of bulk (off: eq. 1 as written)
 };
 
 class FilmContactLaw : public InterfaceLaw {

@@ -22,6 +22,31 @@ ElectricalConductanceLaw bay_wanheim_conductance(double normal_stress, double fl
   return out;
 }
 
+ElectricalConductanceLaw bay_wanheim_excess_conductance(double normal_stress, double flow_stress,
+                                                        double mean_resistivity, double coating_resistivity,
+                                                        double film_thickness, double series_conductance,
+                                                        double* d_series) {
+  // h_e = σ_n / N,  N = t_f D + σ_n/h_b,  D = ρ̄ (3 σ_soft − σ_n)⁺ + ρ_c σ_n
+  const double sn = std::max(normal_stress, 0.0);
+  const double excess = 3 * flow_stress - sn;
+  const bool partial = excess > 0;  // α < 1: part of the apparent area conducts
+  const double D = (partial ? mean_resistivity * excess : 0.0) + coating_resistivity * sn;
+  const double N = film_thickness * D + sn / series_conductance;
+  ElectricalConductanceLaw out;
+  if (!(sn > 0)) {
+    if (d_series) *d_series = 0;
+    return out;  // open or just touching: no conductance
+  }
+  const double tN2 = film_thickness / (N * N);
+  const double dD_dsn = (partial ? -mean_resistivity : 0.0) + coating_resistivity;
+  out.conductance = sn / N;
+  out.d_normal_stress = tN2 * (D - sn * dD_dsn);  // ∂(σ_n/N)/∂σ_n; the σ_n/h_b part cancels
+  out.d_flow_stress = partial ? -sn * tN2 * 3 * mean_resistivity : 0.0;
+  out.d_resistivity = partial ? -sn * tN2 * excess : 0.0;
+  if (d_series) *d_series = sn * sn / (N * N * series_conductance * series_conductance);
+  return out;
+}
+
 ThermalConductanceLaw simufact_conductance(double normal_stress, double yield_stress, double mean_conductivity,
                                            double p1, const ThermalContactConstants& c) {
   // HTC = P1 c̄/P2 E^P4,  E = 1 − exp(−u),  u = P3 (F_n/σ_d + P3)  (paper eq. 2)
@@ -105,11 +130,21 @@ Softer softer_yield_stress(const materials::Material& a, double T_a, const mater
 
 Conductance electrical_contact_conductance(const materials::Material& a, const materials::Material& b,
                                            double normal_stress, double temperature_a, double temperature_b,
-                                           const InterfaceProperties& properties, double film_breakdown) {
+                                           const InterfaceProperties& properties, double film_breakdown,
+                                           const Conductance* bulk) {
   const Softer soft = softer_yield_stress(a, temperature_a, b, temperature_b);
   const materials::PropertyValue ra = a.electrical_resistivity(temperature_a);
   const materials::PropertyValue rb = b.electrical_resistivity(temperature_b);
   const double mean_rho = 0.5 * (ra.value + rb.value);
+  if (bulk) {
+    double d_series = 0;
+    const auto law = bay_wanheim_excess_conductance(normal_stress, soft.value, mean_rho,
+                                                    properties.coating_resistivity * (1 - film_breakdown),
+                                                    properties.film_thickness, bulk->value, &d_series);
+    return {law.conductance, law.d_normal_stress,
+            law.d_flow_stress * soft.d_a + law.d_resistivity * 0.5 * ra.slope + d_series * bulk->d_temperature_a,
+            law.d_flow_stress * soft.d_b + law.d_resistivity * 0.5 * rb.slope + d_series * bulk->d_temperature_b};
+  }
   const auto law = bay_wanheim_conductance(normal_stress, soft.value, mean_rho,
                                            properties.coating_resistivity * (1 - film_breakdown),
                                            properties.film_thickness);

@@ -10,6 +10,26 @@
 // the softer material, strength floor included above the solidus); ρ_1, ρ_2: bulk
 // resistivities; ρ_c: coating resistivity (Ω·m); t_f: film thickness (m).
 //
+// The film replaces bulk (default; contact.film_replaces_bulk): eq. 1 is the
+// resistivity of a layer of thickness t_f in which only the real-area fraction
+// α = σ_n/(3 σ_soft) conducts (Tabor: hardness ≈ 3 × flow stress; Bay–Wanheim: the
+// real area grows with σ_n), so at α = 1 its constriction part equals bulk ρ̄. Here
+// the interface has zero thickness and the mesh already holds the bulk metal on both
+// sides, so the interface adds only what the layer has in excess of that bulk, and
+// none once the contact is complete — as constriction resistance is defined: the
+// resistance in addition to that of the same conductor in full contact (R. Holm,
+// Electric Contacts, 4th ed., Springer 1967; M.G. Cooper, B.B. Mikic and M.M.
+// Yovanovich, Int. J. Heat Mass Transfer 12 (1969) 279–300):
+//     r = t_f (ρ̄ (3 σ_soft/σ_n − 1)⁺ + ρ_c) + 1/h_b,   h_e = 1/r,
+// α capped at 1 (an area fraction), and h_b the bonded layer's conductance (below) in
+// series, which keeps h_e finite where r's first part vanishes (at most 1/2000 of a
+// cell's resistance). The layer form is our reading; its 1/α growth at small α is
+// eq. 1's, where the flux-tube theory of Cooper et al. grows as 1/√α, so the sources
+// carry the principle (zero at complete contact), not the shape. Without it
+// (film_replaces_bulk: false) the interface counts ρ̄ t_f twice at complete contact:
+// with t_f,E/S = 0.48 mm, 14–17 µΩ on each electrode face for the whole weld, which
+// melts the electrode (docs/MODEL.md, "Interfaces").
+//
 // Thermal contact conductance, Simufact form (paper eq. 2):
 //     HTC = P1 (c_1 + c_2)/2 (1/P2) (1 − exp(−P3 (F_n/σ_d + P3)))^P4   [W/(m²K)]
 // c_i: table thermal conductivities of the two sides (the λ_m modification of paper
@@ -92,6 +112,17 @@ struct ElectricalConductanceLaw {
 ElectricalConductanceLaw bay_wanheim_conductance(double normal_stress, double flow_stress,
                                                  double mean_resistivity, double coating_resistivity,
                                                  double film_thickness);
+// The same film as a zero-thickness interface on a mesh that already holds the bulk
+// metal the film stands for: only the constriction resistance in excess of that bulk
+// layer, with the real-area fraction α = σ_n/(3 σ_soft) capped at 1 (complete
+// contact), in series with the bulk-like conductance h_b that keeps h_e finite:
+//     r = t_f (ρ̄ (3 σ_soft/σ_n − 1)⁺ + ρ_c) + 1/h_b,   h_e = 1/r
+//       = σ_n / (t_f D + σ_n/h_b),   D = ρ̄ (3 σ_soft − σ_n)⁺ + ρ_c σ_n.
+// d_resistivity is ∂h_e/∂ρ̄; ∂h_e/∂h_b is returned in d_series.
+ElectricalConductanceLaw bay_wanheim_excess_conductance(double normal_stress, double flow_stress,
+                                                        double mean_resistivity, double coating_resistivity,
+                                                        double film_thickness, double series_conductance,
+                                                        double* d_series = nullptr);
 
 // HTC of paper eq. 2 and its partial derivatives.
 struct ThermalConductanceLaw {
@@ -173,9 +204,12 @@ struct Conductance {
 // σ_n, with the film broken down to degree φ (ρ_c (1 − φ) in place of ρ_c; φ is a
 // history, so the temperature derivatives do not include it). The min() choosing the
 // softer side is only C⁰ where the two yield curves cross.
+// With `bulk` (a conductance > 0, e.g. bonded_electrical_conductance), the excess
+// form bay_wanheim_excess_conductance in series with it; without, eq. 1 as written.
 Conductance electrical_contact_conductance(const materials::Material& a, const materials::Material& b,
                                            double normal_stress, double temperature_a, double temperature_b,
-                                           const InterfaceProperties& properties, double film_breakdown = 0.0);
+                                           const InterfaceProperties& properties, double film_breakdown = 0.0,
+                                           const Conductance* bulk = nullptr);
 // Simufact HTC between material a at T_a and b at T_b, normal stress F_n (no closure factor).
 Conductance thermal_contact_conductance(const materials::Material& a, const materials::Material& b,
                                         double normal_stress, double temperature_a, double temperature_b,

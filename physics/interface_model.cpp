@@ -17,6 +17,7 @@ contact::FilmContactConstants film_constants(const ContactParameters& p) {
   c.film_breakdown = p.film_breakdown;
   c.film_breakdown_start = p.film_breakdown_start;
   c.film_breakdown_end = p.film_breakdown_end;
+  c.film_replaces_bulk = p.film_replaces_bulk;
   return c;
 }
 

@@ -240,6 +240,12 @@ void declare_contact(ConfigSchema& s) {
       .default_value(plain(film.film_breakdown_end) + " degC")
       .range(Range::closed(-50, 1500))
       .doc("Where the film is gone; above film_breakdown_start.");
+  s.boolean("contact.film_replaces_bulk").default_value(film.film_replaces_bulk ? "true" : "false")
+      .doc("The film of thickness t_f stands in place of metal the mesh already holds, so "
+           "the interface adds only the constriction resistance in excess of that bulk "
+           "layer, rho_bar (3 sigma_soft/sigma_n - 1)+ t_f, and zero at complete contact, "
+           "plus the coating term (docs/MODEL.md). false: eq. 1 as written, counting "
+           "rho_bar t_f twice at complete contact.");
 }
 
 void declare_thermal(ConfigSchema& s) {
@@ -633,6 +639,7 @@ Problem make_problem(const Config& config) {
   problem.contact.film_breakdown = config.boolean("contact.film_breakdown");
   problem.contact.film_breakdown_start = config.number("contact.film_breakdown_start");
   problem.contact.film_breakdown_end = config.number("contact.film_breakdown_end");
+  problem.contact.film_replaces_bulk = config.boolean("contact.film_replaces_bulk");
   if (!(problem.contact.film_breakdown_end > problem.contact.film_breakdown_start))
     config.fail("contact.film_breakdown_end", "must lie above contact.film_breakdown_start (" +
                                                   plain(problem.contact.film_breakdown_start) + " degC)");

@@ -58,6 +58,7 @@ struct ContactParameters {
   bool film_breakdown{};             // rho_c fades with the film breakdown degree
   double film_breakdown_start{};     // degC, the film starts to break down (hotter side)
   double film_breakdown_end{};       // degC, the film is gone
+  bool film_replaces_bulk{};         // the interface adds only the resistance in excess of bulk
 };
 
 struct ThermalParameters {

@@ -409,18 +409,35 @@ void WeldDriver::update_bonding(const Eigen::VectorXd& T) {
   mech_->set_bonding_degree(degree);
 }
 
-std::string WeldDriver::weld_step(std::size_t k) {
-  const double t = times_[k], dt = times_[k] - times_[k - 1];
+std::string WeldDriver::weld_step(std::size_t k) { return weld_part(k, times_[k - 1], times_[k], 0); }
+
+std::string WeldDriver::weld_part(std::size_t k, double t0, double t, int depth) {
+  const double dt = t - t0;
   const double I = problem_.schedule.current.at(t);
+  const bool step_end = t == times_[k];
   const contact::ContactState contact = contact_state(*mech_);
 
   // 1. Electro-thermal fixed point on the contact state of the last mechanics solve.
+  // Where it fails (current crowding into a contact edge that heats and conducts
+  // better can outrun the fixed point within one step), the part is solved in halves:
+  // the schedule itself, and every step where the coupling converges, stay as they are.
   const CoupledStepReport coupled = coupling_->solve(dt, I, mech_->positions(), contact);
+  if (!coupled.converged && depth < max_coupling_split) {
+    ++result_.n_coupling_splits;
+    result_.n_coupling_iterations += coupled.iterations;
+    const double mid = 0.5 * (t0 + t);
+    if (std::string failure = weld_part(k, t0, mid, depth + 1); !failure.empty()) return failure;
+    return weld_part(k, mid, t, depth + 1);
+  }
   if (!coupled.converged) {
     // Where an electrode is melting, the failure names it first (the likely cause) and
     // keeps the solver's own message after it.
     const std::string melting = I != 0.0 ? electrode_melting(thermal_->temperature()) : std::string();
-    return step_label(k) + ", " + (melting.empty() ? coupled.failure : melting + "; there " + coupled.failure);
+    char part[96];
+    std::snprintf(part, sizeof part, " (also in parts of 1/%d step; the part ending at %.4f ms)",
+                  1 << max_coupling_split, t * 1e3);
+    return step_label(k) + ", " + (melting.empty() ? coupled.failure : melting + "; there " + coupled.failure) +
+           part;
   }
   const Eigen::VectorXd T_iter = thermal_->temperature();
 
@@ -443,7 +460,7 @@ std::string WeldDriver::weld_step(std::size_t k) {
   result_.n_coupling_iterations += coupled.iterations;
   account_energy(I, dt);
 
-  if (progress_)
+  if (progress_ && step_end)
     progress_({"weld", static_cast<int>(k), result_.n_steps, t, T_iter.maxCoeff(),
                I != 0.0 ? electrical_->solution().resistance : 0.0});
   if (verbose_)
@@ -455,7 +472,7 @@ std::string WeldDriver::weld_step(std::size_t k) {
   update_bonding(T_iter);
   clock_.start("mechanics");
   const MechanicsStepOutcome mech =
-      stepper_->advance(dt, problem_.schedule.force.at(times_[k - 1]), problem_.schedule.force.at(t),
+      stepper_->advance(dt, problem_.schedule.force.at(t0), problem_.schedule.force.at(t),
                         thermal_->committed_temperature(), T_iter);
   if (!mech.converged)
     return step_label(k) + ", mechanics (also in sub-steps of 1/32 step): " + mech.failure;
@@ -465,8 +482,9 @@ std::string WeldDriver::weld_step(std::size_t k) {
   thermal_->commit();
   if (const std::string tangled = check_cells(t); !tangled.empty()) return step_label(k) + ": " + tangled;
 
-  // 4. Outputs: the nugget's share of the energy when the current stops, the signals
-  // (and fields) at output times.
+  // 4. Outputs, at the end of the step only: the nugget's share of the energy when the
+  // current stops, the signals (and fields) at output times.
+  if (!step_end) return {};
   if (std::abs(t - problem_.schedule.current.time.back()) < 1e-12)
     nugget_energy_fraction_ = nugget_enthalpy(mesh_, mech_->positions(), thermal_->committed_temperature(),
                                               peak_temperature(), sheet_bodies_, liquidus_, body_materials_,

@@ -11,7 +11,8 @@
 //   setup_weld()    the electrical and thermal solvers, the step schedule, the signal
 //                   columns and the field writer
 //   weld_step(k)    for every step: the electro-thermal fixed point (ElectroThermalStep,
-//                   which owns its retries), the electrode-melting check, the energy
+//                   which owns its retries; where it still fails, the step is solved in
+//                   halves, down to 1/16 step, as the mechanics is), the electrode-melting check, the energy
 //                   bookkeeping, the sheet/sheet bonding, the mechanics
 //                   (MechanicsStepper, which owns the sub-stepping), the recorded outputs
 //   finish()        the final nugget and energy balance, then the result files
@@ -83,6 +84,10 @@ class WeldDriver {
   void setup_weld();
   void register_signals();
   std::string weld_step(std::size_t k);
+  // The part [t0, t1] of step k; where its electro-thermal coupling fails, the part is
+  // solved as two halves, down to 1/2^max_coupling_split of the step.
+  std::string weld_part(std::size_t k, double t0, double t1, int depth);
+  static constexpr int max_coupling_split = 4;
   void finish();
 
   // Copies the solvers' counters (Newton iterations, sub-steps, retries) into the result.

@@ -111,7 +111,8 @@ TEST(ElectricalVerification, UniformRodResistanceIsExactOnHangingNodeMesh) {
 // to length L):
 //   φ_1(x) = V (1 − C_E σ_2 x / D),  φ_2(x) = −V C_E σ_1 (x − 2L) / D,
 //   D = σ_1σ_2 + C_E L (σ_1 + σ_2),   V = I/(πr²) (L/σ_1 + 1/C_E + L/σ_2).
-// C_E is Bay–Wanheim at a fixed 80 MPa contact pressure. The blocks have different
+// C_E is Bay–Wanheim at a fixed 80 MPa contact pressure (the default film that
+// replaces bulk, in series with the bonded layer). The blocks have different
 // (non-matching) meshes; the fields are linear in z, so the solution is exact.
 TEST(ElectricalContact, TwoBlockPotentialMatchesClosedForm) {
   const double upper_size = 0.25e-3;
@@ -129,7 +130,11 @@ TEST(ElectricalContact, TwoBlockPotentialMatchesClosedForm) {
   const Eigen::VectorXd T = Eigen::VectorXd::Constant(mesh.n_nodes(), 20.0);
   const auto& sol = electrical.solve(mesh.nodes, T, current, contact);
 
-  const double C = contact::electrical_contact_conductance(upper_mat, lower_mat, pressure, 20.0, 20.0, props).value;
+  // The default film replaces bulk: eq. 1's excess over ρ̄ t_f in series with the bonded
+  // layer F (σ_1 + σ_2)/h_local of the 0.25 mm interface faces.
+  const auto bulk = contact::bonded_electrical_conductance(upper_mat, lower_mat, 20.0, 20.0, upper_size, 1e3);
+  const double C =
+      contact::electrical_contact_conductance(upper_mat, lower_mat, pressure, 20.0, 20.0, props, 0.0, &bulk).value;
   const double s1 = 1 / rho_1, s2 = 1 / rho_2;
   const double D = s1 * s2 + C * L * (s1 + s2);
   const double V = current / (M_PI * radius * radius) * (L / s1 + 1 / C + L / s2);
@@ -202,7 +207,9 @@ TEST(ElectricalContact, TwoBlockOnNonMatchingMeshesConservesCurrent) {
   const auto lower_mat = conductor("lower_metal", 3e-7, 900e6);
   const fem::Mesh mesh = two_block_column(L, radius, L / 4, L / 6);
   const contact::InterfaceProperties props{"contact", 1e-6, 2e-6, 1e-3, false};
-  const contact::InterfaceModel model = contact::film_contact_model({props});
+  contact::FilmContactConstants as_written;  // eq. 1 as written: C is the same on both meshes' faces
+  as_written.film_replaces_bulk = false;
+  const contact::InterfaceModel model = contact::film_contact_model({props}, as_written);
   physics::Electrical electrical(mesh, {&lower_mat, &upper_mat}, model, column_settings());
   std::vector<contact::InterfacePairing> pairings;
   pairings.emplace_back(mesh, "contact", 2);

@@ -86,6 +86,67 @@ TEST(InterfaceLaws, BayWanheimConductanceVanishesSmoothlyWithPressure) {
   EXPECT_NEAR(contact::bay_wanheim_conductance(1e30, ss, rho, rc, tf).conductance, 1 / (rc * tf), 1e-9 / (rc * tf));
 }
 
+// The film as a layer that replaces bulk: its resistance per area is eq. 1's minus the
+// bulk layer ρ̄ t_f the mesh already holds, in series with the bulk-like 1/h_b, while
+// the real-area fraction σ_n/(3 σ_soft) is below 1:
+//     1/h_e = t_f (3 (σ_soft/σ_n) ρ̄ + ρ_c) − ρ̄ t_f + 1/h_b.
+TEST(InterfaceLaws, FilmReplacingBulkAddsOnlyTheResistanceAboveTheBulkLayer) {
+  const double sn = 100e6, ss = 400e6, rho = 6e-7, rc = 2e-6, tf = 5e-4, hb = 3e13;
+  const double written = 1 / contact::bay_wanheim_conductance(sn, ss, rho, rc, tf).conductance;
+  const double excess = 1 / contact::bay_wanheim_excess_conductance(sn, ss, rho, rc, tf, hb).conductance;
+  EXPECT_NEAR(excess, written - rho * tf + 1 / hb, 1e-12 * written);
+  // Without a series conductance (h_b → ∞) the excess form is exactly eq. 1 minus ρ̄ t_f.
+  const double bare = 1 / contact::bay_wanheim_excess_conductance(sn, ss, rho, rc, tf, HUGE_VAL).conductance;
+  EXPECT_NEAR(bare, tf * (3 * ss / sn * rho + rc) - rho * tf, 1e-12 * written);
+}
+
+// At complete contact (σ_n ≥ 3 σ_soft, Tabor's hardness: the real area is the apparent
+// area) the constriction resistance is gone: what is left is the coating ρ_c t_f in
+// series with 1/h_b, and without a coating exactly the bulk-like h_b.
+TEST(InterfaceLaws, FilmReplacingBulkLeavesNoConstrictionAtCompleteContact) {
+  const double ss = 100e6, rho = 6e-7, rc = 2e-6, tf = 5e-4, hb = 3e13;
+  for (const double sn : {300e6, 450e6, 2e9}) {
+    const auto law = contact::bay_wanheim_excess_conductance(sn, ss, rho, rc, tf, hb);
+    EXPECT_NEAR(1 / law.conductance, rc * tf + 1 / hb, 1e-12 * rc * tf) << sn;
+    EXPECT_EQ(law.d_flow_stress, 0.0);
+    EXPECT_EQ(law.d_resistivity, 0.0);
+    EXPECT_NEAR(contact::bay_wanheim_excess_conductance(sn, ss, rho, 0.0, tf, hb).conductance, hb, 1e-12 * hb) << sn;
+  }
+  // Just below complete contact the constriction part is small and continuous: its
+  // resistance is ρ̄ t_f (3 σ_soft/σ_n − 1), linear in the distance to σ_n = 3 σ_soft.
+  const double sn = 299e6;
+  const double r = 1 / contact::bay_wanheim_excess_conductance(sn, ss, rho, 0.0, tf, hb).conductance;
+  EXPECT_NEAR(r, rho * tf * (3 * ss / sn - 1) + 1 / hb, 1e-9 * r);
+}
+
+// Every derivative of the excess form equals central differences, below complete
+// contact and above it (where only σ_n and h_b act), and σ_n → 0 gives h_e → 0 with
+// eq. 1's slope 1/(3 t_f σ_soft ρ̄).
+TEST(InterfaceLaws, FilmReplacingBulkDerivativesMatchFiniteDifferences) {
+  const double rho = 6e-7, rc = 5e-6, tf = 2e-4, hb = 3e13;
+  for (const double sn : {150e6, 250e6}) {
+    const double ss = 100e6;  // 3 σ_soft = 300 MPa: the first point partial, the second complete
+    double d_series = 0;
+    const auto law = contact::bay_wanheim_excess_conductance(sn, ss, rho, rc, tf, hb, &d_series);
+    const auto h = [&](double a, double b, double c, double d) {
+      return contact::bay_wanheim_excess_conductance(a, b, c, rc, tf, d).conductance;
+    };
+    const double d_sn = central_difference([&](double x) { return h(x, ss, rho, hb); }, sn, 1e3);
+    const double d_ss = central_difference([&](double x) { return h(sn, x, rho, hb); }, ss, 1e3);
+    const double d_rho = central_difference([&](double x) { return h(sn, ss, x, hb); }, rho, 1e-12);
+    const double d_hb = central_difference([&](double x) { return h(sn, ss, rho, x); }, hb, 1e10);
+    EXPECT_NEAR(law.d_normal_stress, d_sn, 1e-6 * std::abs(d_sn)) << sn;
+    EXPECT_NEAR(law.d_flow_stress, d_ss, 1e-6 * std::abs(d_ss) + 1e-30) << sn;
+    EXPECT_NEAR(law.d_resistivity, d_rho, 1e-6 * std::abs(d_rho) + 1e-30) << sn;
+    EXPECT_NEAR(d_series, d_hb, 1e-5 * std::abs(d_hb)) << sn;
+  }
+  const double ss = 500e6;
+  EXPECT_EQ(contact::bay_wanheim_excess_conductance(0.0, ss, rho, rc, tf, hb).conductance, 0.0);
+  EXPECT_EQ(contact::bay_wanheim_excess_conductance(-1e6, ss, rho, rc, tf, hb).conductance, 0.0);
+  const double slope = 1 / (3 * tf * ss * rho);
+  EXPECT_NEAR(contact::bay_wanheim_excess_conductance(1.0, ss, rho, rc, tf, hb).conductance, slope, 1e-8 * slope);
+}
+
 // Paper eq. 2 at F_n = 0 and F_n = σ_d with docs/MODEL.md's constants, and with other P3, P4.
 TEST(InterfaceLaws, SimufactConductanceMatchesPaperEquationTwo) {
   const double p1 = 1e-3, c1 = 320, c2 = 30, sd = 400e6;
@@ -321,15 +382,18 @@ TEST(InterfaceLaws, PartlyBondedConductanceIsTheFadingFilmInSeriesWithTheBondedL
   EXPECT_EQ(contact::partly_bonded_conductance(0.0, hb, 1.0), hb);
 }
 
-// The film-contact law at a closed, unbonded point: h_e of paper eq. 1 and h of eq. 2
-// by hand (CuCrZr at 455 °C on DP1200 at 655 °C, 200 MPa, closed: χ = 1); an open
-// point (gap ≥ g_c, no pressure) conducts neither current nor heat.
+// The film-contact law at a closed, unbonded point, with eq. 1 as written
+// (film_replaces_bulk off): h_e of paper eq. 1 and h of eq. 2 by hand (CuCrZr at
+// 455 °C on DP1200 at 655 °C, 200 MPa, closed: χ = 1); an open point (gap ≥ g_c, no
+// pressure) conducts neither current nor heat.
 TEST(FilmContactLaw, ClosedPointConductsByPaperEquationsOneAndTwo) {
   materials::MaterialLibrary library;
   const auto copper = library.load("CuCrZr");
   const auto steel = library.load("DP1200");
   const contact::InterfaceProperties props{"es", 1e-5, 5e-6, 1e-2, false};
-  const contact::FilmContactLaw law(props);
+  contact::FilmContactConstants as_written;
+  as_written.film_replaces_bulk = false;
+  const contact::FilmContactLaw law(props, as_written);
   contact::InterfacePoint pt = closed_es_point(copper, steel);
   const double soft = std::min(copper.yield_stress(0, 455.0).yield_stress, steel.yield_stress(0, 655.0).yield_stress);
   const double rho_bar =
@@ -348,7 +412,7 @@ TEST(FilmContactLaw, ClosedPointConductsByPaperEquationsOneAndTwo) {
   EXPECT_EQ(law.thermal_conductance(pt), 0.0);
 }
 
-// A broken film leaves eq. 1's constriction term alone: at breakdown degree φ the
+// A broken film leaves eq. 1's constriction term alone (as written): at breakdown degree φ the
 // coating term is ρ_c (1 − φ), by hand at φ = 1/2 and 1; the law reports the degree of
 // contact::film_breakdown_degree over the default band (20–700 °C), and none when the
 // breakdown is switched off.
@@ -356,7 +420,9 @@ TEST(FilmContactLaw, BrokenFilmLeavesTheConstrictionTermOfEquationOne) {
   materials::MaterialLibrary library;
   const auto copper = library.load("CuCrZr");
   const auto steel = library.load("DP1200");
-  const contact::FilmContactLaw law({"es", 1e-5, 5e-6, 1e-2, false});
+  contact::FilmContactConstants as_written;
+  as_written.film_replaces_bulk = false;
+  const contact::FilmContactLaw law({"es", 1e-5, 5e-6, 1e-2, false}, as_written);
   contact::InterfacePoint pt = closed_es_point(copper, steel);
   const double soft = std::min(copper.yield_stress(0, 455.0).yield_stress, steel.yield_stress(0, 655.0).yield_stress);
   const double rho_bar =
@@ -372,6 +438,52 @@ TEST(FilmContactLaw, BrokenFilmLeavesTheConstrictionTermOfEquationOne) {
   contact::FilmContactConstants off;
   off.film_breakdown = false;
   EXPECT_EQ(contact::FilmContactLaw({"es", 1e-5, 5e-6, 1e-2, false}, off).film_breakdown_degree(pt), 0.0);
+}
+
+// The default law (film_replaces_bulk): at the closed E/S point the resistance per area
+// is eq. 1's excess over bulk, t_f (ρ̄ (3 σ_soft/σ_n − 1) + ρ_c (1 − φ)), in series with
+// the bonded layer F (σ_s + σ_m)/h_local, by hand; the material wrapper's temperature
+// derivatives (through σ_soft, ρ̄ and the bonded layer) equal finite differences.
+TEST(FilmContactLaw, DefaultFilmReplacesBulkInSeriesWithTheBondedLayer) {
+  materials::MaterialLibrary library;
+  const auto copper = library.load("CuCrZr");
+  const auto steel = library.load("DP1200");
+  const contact::InterfaceProperties props{"es", 1e-5, 5e-6, 1e-2, false};
+  const contact::FilmContactLaw law(props);
+  EXPECT_TRUE(law.constants().film_replaces_bulk);
+  contact::InterfacePoint pt = closed_es_point(copper, steel);
+  pt.face_length = 62.5e-6;
+  pt.film_breakdown = 0.5;
+  const double soft = std::min(copper.yield_stress(0, 455.0).yield_stress, steel.yield_stress(0, 655.0).yield_stress);
+  ASSERT_GT(3 * soft, 200e6);  // below complete contact at 200 MPa
+  const double rho_bar =
+      0.5 * (copper.electrical_resistivity(455.0).value + steel.electrical_resistivity(655.0).value);
+  const double hb = 1e3 * (1 / copper.electrical_resistivity(455.0).value + 1 / steel.electrical_resistivity(655.0).value) /
+                    62.5e-6;
+  const double r = 1e-5 * (rho_bar * (3 * soft / 200e6 - 1) + 5e-6 * 0.5) + 1 / hb;
+  EXPECT_NEAR(law.electrical_conductance(pt), 1 / r, 1e-12 / r);
+
+  const auto bulk = [&](double Ta, double Tb) {
+    return contact::bonded_electrical_conductance(copper, steel, Ta, Tb, 62.5e-6, 1e3);
+  };
+  const double Ta = 455.0, Tb = 655.0, p = 200e6;
+  const auto b0 = bulk(Ta, Tb);
+  const auto he = contact::electrical_contact_conductance(copper, steel, p, Ta, Tb, props, 0.5, &b0);
+  EXPECT_NEAR(he.value, 1 / r, 1e-12 / r);
+  const auto he_a = [&](double x) {
+    const auto b = bulk(x, Tb);
+    return contact::electrical_contact_conductance(copper, steel, p, x, Tb, props, 0.5, &b).value;
+  };
+  const auto he_b = [&](double x) {
+    const auto b = bulk(Ta, x);
+    return contact::electrical_contact_conductance(copper, steel, p, Ta, x, props, 0.5, &b).value;
+  };
+  const auto he_p = [&](double x) {
+    return contact::electrical_contact_conductance(copper, steel, x, Ta, Tb, props, 0.5, &b0).value;
+  };
+  EXPECT_NEAR(he.d_temperature_a, central_difference(he_a, Ta, 1e-3), 1e-5 * std::abs(he.d_temperature_a) + 1e-12 * he.value);
+  EXPECT_NEAR(he.d_temperature_b, central_difference(he_b, Tb, 1e-3), 1e-5 * std::abs(he.d_temperature_b) + 1e-12 * he.value);
+  EXPECT_NEAR(he.d_pressure, central_difference(he_p, p, 1e3), 1e-6 * std::abs(he.d_pressure));
 }
 
 // A fully bonded point conducts like the bonded layer, F (k_s + k_m)/h_local, for

@@ -256,7 +256,10 @@ TEST(ThermalVerification, TwoBlockElectroThermalContactMatchesClosedForm) {
   }
 
   const double j = current / (M_PI * R * R);
-  const double C = contact::electrical_contact_conductance(upper_mat, lower_mat, pressure, T_0, T_0, props).value;
+  // The default film replaces bulk: in series with the bonded layer of the L/8 faces.
+  const auto bulk = contact::bonded_electrical_conductance(upper_mat, lower_mat, T_0, T_0, L / 8, 1e3);
+  const double C =
+      contact::electrical_contact_conductance(upper_mat, lower_mat, pressure, T_0, T_0, props, 0.0, &bulk).value;
   const double h = contact::thermal_contact_conductance(upper_mat, lower_mat, pressure, T_0, T_0, props,
                                                         contact::ThermalContactConstants{})
                        .value;
