@@ -1,6 +1,8 @@
 // Nugget sizes from edge crossings of the isotherm; see nugget.hpp.
 #include "physics/nugget.hpp"
 
+#include "meshes/weld_mesh.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -14,8 +16,14 @@ NuggetSize measure_nugget(const fem::Mesh& mesh, const std::vector<fem::Point>& 
   const int n_sheets = static_cast<int>(sheet_bodies.size());
   std::vector<double> z_lo(n_sheets, inf), z_hi(n_sheets, -inf);
   double r_max = -inf, z_min = inf, z_max = -inf;
+  double axis_min = inf, axis_max = -inf;  // the region's ends on the axis
+  const auto on_axis = [&](int n) { return mesh.nodes[n].x() == 0.0; };
 
-  auto take = [&](int k, const fem::Point& p) {
+  auto take = [&](int k, const fem::Point& p, bool axis) {
+    if (axis) {
+      axis_min = std::min(axis_min, p.y());
+      axis_max = std::max(axis_max, p.y());
+    }
     r_max = std::max(r_max, p.x());
     z_min = std::min(z_min, p.y());
     z_max = std::max(z_max, p.y());
@@ -32,20 +40,43 @@ NuggetSize measure_nugget(const fem::Mesh& mesh, const std::vector<fem::Point>& 
     for (int a = 0; a < 4; ++a) {
       const int n1 = c[a], n2 = c[(a + 1) % 4];
       const double f1 = peak[n1] - iso, f2 = peak[n2] - iso;
-      if (f1 >= 0) take(k, x[n1]);
+      // An edge on the axis (both ends at r = 0 in the reference) is the only kind a
+      // point of the axial height can lie on; the axis is a boundary, so it carries
+      // no hanging node and both its ends are taken here.
+      const bool axis_edge = on_axis(n1) && on_axis(n2);
+      if (f1 >= 0) take(k, x[n1], axis_edge);
+      if (axis_edge && f2 >= 0) take(k, x[n2], true);
       if ((f1 >= 0) != (f2 >= 0)) {  // the isotherm crosses this edge
         const double s = f1 / (f1 - f2);
-        take(k, (1 - s) * x[n1] + s * x[n2]);
+        take(k, (1 - s) * x[n1] + s * x[n2], axis_edge);
       }
     }
+  }
+  // The diameter in the faying planes: the faces of both sides of every sheet/sheet
+  // interface, the region's largest radius on them (nodes and crossings).
+  double r_faying = -inf;
+  bool faying_planes = false;
+  for (const auto& [name, pair] : mesh.interfaces) {
+    if (pair.kind != meshes::interface_kind::sheet_sheet) continue;
+    faying_planes = true;
+    for (const std::string& side : {pair.first, pair.second})
+      for (const fem::BoundaryFace& face : mesh.boundary(side)) {
+        const auto [n1, n2] = mesh.face_nodes(face);
+        const double iso = isotherm[mesh.cell_body[face.cell]];
+        const double f1 = peak[n1] - iso, f2 = peak[n2] - iso;
+        if (f1 >= 0) r_faying = std::max(r_faying, x[n1].x());
+        if (f2 >= 0) r_faying = std::max(r_faying, x[n2].x());
+        if ((f1 >= 0) != (f2 >= 0)) r_faying = std::max(r_faying, x[n1].x() + f1 / (f1 - f2) * (x[n2].x() - x[n1].x()));
+      }
   }
   out.penetration.assign(n_sheets, 0.0);
   if (r_max == -inf) {
     out.empty = true;
   } else {
     out.empty = false;
-    out.diameter = 2 * r_max;
-    out.height = z_max - z_min;
+    out.diameter = faying_planes ? (r_faying > -inf ? 2 * r_faying : 0.0) : 2 * r_max;
+    out.extent = z_max - z_min;
+    out.height = axis_max > -inf ? axis_max - axis_min : 0.0;
   }
 
   // Sheet thicknesses and outer surfaces on the axis (deformed).

@@ -8,8 +8,20 @@
 // crosses cell edges (linear along each edge) and from the nodes inside the region:
 // on a bilinear cell the largest radius and the z-extremes of a super-level set lie
 // on the cell boundary, so these points are enough.
-//   diameter   2 · max r over the region                 (d_n, m)
-//   height     max z − min z over the region             (h_n, m)
+//   diameter   2 · max r of the region in the faying planes (d_n, m): on the faces
+//              of the sheet/sheet interfaces, where a standard measures a spot
+//              weld's fused area (AWS D8.1M:2013, "fused area": the area of the
+//              nugget at the faying surface); 0 if the region does not reach them.
+//              A mesh without sheet/sheet interfaces: 2 · max r over the region.
+//   height     the region's extent along the axis r = 0 (h_n, m): the nugget's
+//              thickness where a lens-shaped nugget is thickest, as a cross-section
+//              is measured at the weld centre. Melt at the sheet surface beside the
+//              electrode face's edge is not counted: it is apart from the nugget on
+//              a macrograph, and counting it makes h_n jump where that melt appears
+//              (docs/MODEL.md, "Outputs"). 0 if the region does not reach the axis
+//              (a ring-shaped melt).
+//   extent     max z − min z over the whole region (m), surface melt included: the
+//              plausibility guard's "taller than the stack"
 //   penetration into sheet k: the region's z-extent inside sheet k / thickness of k
 //              on the axis; above 1 where the region spans the sheet off the axis,
 //              where the indented sheet is thicker than on it (a nugget through
@@ -28,7 +40,8 @@ namespace rsw::physics {
 
 struct NuggetSize {
   double diameter = 0;             // m
-  double height = 0;               // m
+  double height = 0;               // m, on the axis
+  double extent = 0;               // m, over the whole region
   std::vector<double> penetration; // per sheet, fraction of its thickness
   double unmolten_thickness = 0;   // m, t_unmolt (sheet stack thickness if no nugget)
   bool empty = true;

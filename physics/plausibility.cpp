@@ -21,9 +21,10 @@ std::vector<std::string> plausibility_warnings(const WeldOutcome& o) {
     warnings.push_back(lead + format("the nugget (d_n_liq %.2f mm) is wider than the electrode face (%.2f mm), "
                                      "where real welds risk expulsion (not modelled)",
                                      o.nugget_diameter * 1e3, o.face_diameter * 1e3));
-  if (o.nugget_height > o.stack_height)
-    warnings.push_back(lead + format("the nugget (h_n_liq %.2f mm) is taller than the sheet stack (%.2f mm)",
-                                     o.nugget_height * 1e3, o.stack_height * 1e3));
+  if (o.melt_extent > o.stack_height)
+    warnings.push_back(lead + format("the melt (%.2f mm high, surface melt included) is taller than the sheet stack "
+                                     "(%.2f mm)",
+                                     o.melt_extent * 1e3, o.stack_height * 1e3));
   for (const auto& [sheet, fraction] : o.penetration)
     if (fraction > 1.0)
       warnings.push_back(lead + "the nugget penetrates " + sheet +

@@ -5,7 +5,9 @@
 // parameters. Each check compares one result with one physical bound:
 //
 //   nugget wider than the face      d_n,liq > the smaller electrode face diameter   [m]
-//   nugget taller than the stack    h_n,liq > the undeformed sheet stack height      [m]
+//   melt taller than the stack      the liquidus region's whole height (nugget.hpp
+//                                   `extent`, surface melt included) > the
+//                                   undeformed sheet stack height                   [m]
 //   penetration above 100 %         penetration of a sheet > 1 (nugget.hpp)         [1]
 //   a sheet above boiling           a sheet's peak temperature > its material's
 //                                   boiling point (melting.boiling_point, 1 atm)   [°C]
@@ -34,7 +36,7 @@ struct SheetPeak {
 
 struct WeldOutcome {
   double nugget_diameter = 0;   // m, d_n,liq
-  double nugget_height = 0;     // m, h_n,liq
+  double melt_extent = 0;       // m, the liquidus region's max z − min z
   std::vector<std::pair<std::string, double>> penetration;  // sheet name, fraction of its thickness
   std::vector<SheetPeak> sheets;
   double face_diameter = 0;     // m, the smaller of the two electrodes' faces

@@ -290,13 +290,13 @@ void WeldDriver::register_signals() {
     s.add("temperature_" + problem_.geometry.sheets[i].name, "degC",
           "highest temperature in " + problem_.geometry.sheets[i].name,
           [i](S r) { return r.sheet_max_temperature[i]; });
-  s.add("d_n_liq", "m", "nugget diameter at the liquidus (peak-temperature field)",
+  s.add("d_n_liq", "m", "nugget diameter at the liquidus in the faying plane (peak-temperature field)",
         [](S r) { return r.liquidus.diameter; });
-  s.add("h_n_liq", "m", "nugget height at the liquidus (peak-temperature field)",
+  s.add("h_n_liq", "m", "nugget height at the liquidus on the axis (peak-temperature field)",
         [](S r) { return r.liquidus.height; });
-  s.add("d_n_sol", "m", "nugget diameter at the solidus (peak-temperature field)",
+  s.add("d_n_sol", "m", "nugget diameter at the solidus in the faying plane (peak-temperature field)",
         [](S r) { return r.solidus.diameter; });
-  s.add("h_n_sol", "m", "nugget height at the solidus (peak-temperature field)",
+  s.add("h_n_sol", "m", "nugget height at the solidus on the axis (peak-temperature field)",
         [](S r) { return r.solidus.height; });
   const auto states = mech_->interface_states();
   for (std::size_t i = 0; i < states.size(); ++i)
@@ -533,7 +533,7 @@ void WeldDriver::finish() {
   // Results the solvers reached but an engineer would reject (plausibility.hpp).
   WeldOutcome outcome;
   outcome.nugget_diameter = liq.diameter;
-  outcome.nugget_height = liq.height;
+  outcome.melt_extent = liq.extent;
   for (std::size_t k = 0; k < liq.penetration.size(); ++k)
     outcome.penetration.emplace_back(problem_.geometry.sheets[k].name, liq.penetration[k]);
   for (int b : sheet_bodies_)

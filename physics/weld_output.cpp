@@ -138,10 +138,10 @@ namespace {
 // One line on each of the run's final nugget and energy values (results.h5).
 std::string nugget_description(const std::string& name) {
   static const std::map<std::string, std::string> known = {
-      {"d_n_liq", "nugget diameter at the liquidus, at the end (peak-temperature field)"},
-      {"h_n_liq", "nugget height at the liquidus, at the end (peak-temperature field)"},
-      {"d_n_sol", "nugget diameter at the solidus, at the end (peak-temperature field)"},
-      {"h_n_sol", "nugget height at the solidus, at the end (peak-temperature field)"},
+      {"d_n_liq", "nugget diameter at the liquidus in the faying plane, at the end (peak-temperature field)"},
+      {"h_n_liq", "nugget height at the liquidus on the axis, at the end (peak-temperature field)"},
+      {"d_n_sol", "nugget diameter at the solidus in the faying plane, at the end (peak-temperature field)"},
+      {"h_n_sol", "nugget height at the solidus on the axis, at the end (peak-temperature field)"},
       {"w_elec", "electrode/sheet contact width at the end: twice the mean contact radius of those interfaces"},
       {"d_indent", "indentation depth of the electrodes at the end"},
       {"t_unmolt", "unmolten thickness on the axis: the smaller distance from the liquidus nugget to the outer surfaces"}};

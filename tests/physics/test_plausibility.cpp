@@ -16,7 +16,7 @@ using rsw::physics::WeldOutcome;
 WeldOutcome sound_weld() {
   WeldOutcome o;
   o.nugget_diameter = 5.0e-3;
-  o.nugget_height = 1.8e-3;
+  o.melt_extent = 1.8e-3;
   o.penetration = {{"sheet_1", 0.9}, {"sheet_2", 0.9}};
   o.sheets = {{"sheet_1", "DP1200", 2300, 2861}, {"sheet_2", "DP1200", 2300, 2861}};
   o.face_diameter = 5.5e-3;
@@ -41,9 +41,9 @@ TEST(Plausibility, ANuggetWiderThanTheFaceWarnsWithBothDiameters) {
   EXPECT_TRUE(plausibility_warnings(o).empty());
 }
 
-TEST(Plausibility, ANuggetTallerThanTheStackWarns) {
+TEST(Plausibility, AMeltTallerThanTheStackWarns) {
   WeldOutcome o = sound_weld();
-  o.nugget_height = 2.14e-3;
+  o.melt_extent = 2.14e-3;
   const auto w = plausibility_warnings(o);
   ASSERT_EQ(w.size(), 1u);
   EXPECT_TRUE(contains(w[0], "taller than the sheet stack (2.00 mm)")) << w[0];
@@ -72,7 +72,7 @@ TEST(Plausibility, ASheetAboveItsBoilingPointWarnsAndAnUnknownBoilingPointIsNotC
 TEST(Plausibility, EveryPassedBoundWarnsOnceInAFixedOrder) {
   WeldOutcome o = sound_weld();
   o.nugget_diameter = 8.04e-3;
-  o.nugget_height = 2.14e-3;
+  o.melt_extent = 2.14e-3;
   o.penetration = {{"sheet_1", 1.35}, {"sheet_2", 1.35}};
   o.sheets[0].peak_temperature = o.sheets[1].peak_temperature = 5215;
   const auto w = plausibility_warnings(o);

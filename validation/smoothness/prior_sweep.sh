@@ -5,7 +5,11 @@
 # nugget and imprint features of its summary.json, and for each feature the residual
 # after detrending — a least-squares polynomial of degree D in log10 P1 — relative to the feature's range over the sweep. Noise shows
 # as residuals that do not shrink when D grows; a smooth trend's residual falls
-# quickly with D.
+# quickly with D. A sharp bend of the trend (a nugget reaching the sheet surfaces) also
+# leaves a residual, so each line also gives the noise itself, estimated from third
+# differences of the equally spaced values, which a smooth trend hardly has: for
+# independent noise of standard deviation s, E[(Δ³y)²] = C(6,3) s² = 20 s² (the
+# difference-based variance estimator; Hall, Kay & Titterington, Biometrika 77, 1990, 521).
 #   bash validation/smoothness/prior_sweep.sh [N=40] [D=6] [extra --set options]
 # Runs two at a time (about 1 min for N = 40 on two cores); prints one line per feature,
 # and writes every run's features to $CSV if that is set (one row per run).
@@ -70,7 +74,9 @@ for name in rows[0]:
         continue
     fit = np.polynomial.Polynomial.fit(x[ok], y[ok], degree)
     residual = y[ok] - fit(x[ok])
+    noise = np.sqrt(np.mean(np.diff(y[ok], 3) ** 2) / 20)  # runs missing in between count as adjacent
     print(f"{name:12s} largest residual {100 * np.abs(residual).max() / span:5.1f} %, "
-          f"rms {100 * residual.std() / span:5.1f} % of the range {y[ok].min():.5g} .. {y[ok].max():.5g}")
+          f"rms {100 * residual.std() / span:5.1f} %, noise {100 * noise / span:5.2f} % "
+          f"of the range {y[ok].min():.5g} .. {y[ok].max():.5g}")
 PY
 rm -rf "$out"
