@@ -168,7 +168,7 @@ double bonding_degree(double temperature_slave, double solidus_slave, double tem
 // between. Without the factor the
 // sheets of the default weld bonded across gaps of 10–55 µm that had opened beside
 // the contact as the centre expanded, and the ties then held them apart as struts
-// carrying about 1.3 GPa (MODEL.md, "Bonding"). Our choice.
+// carrying about 1.3 GPa (MODEL.md, "Interfaces"). Our choice.
 double bonding_degree_at_gap(double temperature_slave, double solidus_slave, double temperature_master,
                              double solidus_master, double band, double gap, double bonding_gap);
 // Film breakdown degree φ ∈ [0, 1] at the temperatures of the two sides (°C): S(x) of

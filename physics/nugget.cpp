@@ -90,10 +90,10 @@ NuggetSize measure_nugget(const fem::Mesh& mesh, const std::vector<fem::Point>& 
   }
   for (int k = 0; k < n_sheets; ++k)
     if (z_hi[k] > -inf) out.penetration[k] = (z_hi[k] - z_lo[k]) / (top[k] - bottom[k]);
-  if (out.empty)
+  if (axis_max == -inf)  // no region on the axis: the whole stack there is solid
     out.unmolten_thickness = top.front() - bottom.back();
   else
-    out.unmolten_thickness = std::max(0.0, std::min(top.front() - z_max, z_min - bottom.back()));
+    out.unmolten_thickness = std::max(0.0, std::min(top.front() - axis_max, axis_min - bottom.back()));
   return out;
 }
 

@@ -27,7 +27,8 @@
 //              where the indented sheet is thicker than on it (a nugget through
 //              the sheet)
 //   t_unmolt   the smaller distance, on the axis, from the region to the outer
-//              surfaces of the top and bottom sheets (m)
+//              surfaces of the top and bottom sheets (m); the stack's thickness
+//              there if the region does not reach the axis
 // Positions are those of the deformed configuration passed in.
 #pragma once
 

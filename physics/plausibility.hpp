@@ -15,7 +15,7 @@
 // The fifth guard, an electrode face at its solidus, is raised during the run where
 // it first happens (weld_driver.cpp, solver.electrode_melting). A nugget wider than
 // the face reaches beyond the pressed contact, where real welds risk expulsion (the
-// default case's, 5.57 mm under a 5.5 mm face, just passes this bound); a nugget
+// default case's, 5.35 mm under a 5.5 mm face, stays inside this bound); a nugget
 // through the whole stack or a boiling sheet is a burn-through. The model has no
 // free surface, vapour or expulsion, so its outputs there are extrapolations
 // (docs/MODEL.md, "Plausibility").

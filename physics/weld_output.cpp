@@ -147,7 +147,8 @@ std::string nugget_description(const std::string& name) {
       {"t_unmolt", "unmolten thickness on the axis: the smaller distance from the liquidus nugget to the outer surfaces"}};
   if (const auto it = known.find(name); it != known.end()) return it->second;
   if (name.rfind("penetration_", 0) == 0)
-    return "z-extent of the liquidus nugget inside " + name.substr(12) + " on the axis, over its thickness";
+    return "z-extent of the liquidus region (surface melt included) inside " + name.substr(12) +
+           ", over its thickness on the axis";
   return name;
 }
 

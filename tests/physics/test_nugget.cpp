@@ -86,7 +86,7 @@ TEST(Nugget, NoRegionAboveIsothermIsEmpty) {
   EXPECT_NEAR(n.unmolten_thickness, 2e-3, 1e-15);
 }
 
-TEST(Nugget, SurfaceMeltBesideTheFaceCountsInTheExtentOnlyNotInHeightOrDiameter) {
+TEST(Nugget, SurfaceMeltBesideTheFaceCountsInExtentAndPenetrationNotInHeightDiameterOrUnmoltenThickness) {
   // The spot's 1500 °C isotherm is the half-circle of radius 0.25 mm around
   // (2.75 mm, 1 mm): it reaches down to 0.75 mm above the faying surface and out to
   // r = 3 mm, beyond the nugget's rim at A √½ = 2.83 mm. The nugget's height on the
@@ -101,7 +101,8 @@ TEST(Nugget, SurfaceMeltBesideTheFaceCountsInTheExtentOnlyNotInHeightOrDiameter)
   EXPECT_NEAR(both.diameter, 2 * A * std::sqrt(0.5), 2 * 0.17e-6);
   EXPECT_NEAR(both.height, 2 * B * std::sqrt(0.5), 2 * 0.7e-6);
   EXPECT_NEAR(both.extent, 1e-3 + B * std::sqrt(0.5), 0.7e-6);
-  EXPECT_GT(both.penetration[0], lens.penetration[0]);  // penetration counts all melt
+  EXPECT_DOUBLE_EQ(both.unmolten_thickness, lens.unmolten_thickness);  // measured on the axis
+  EXPECT_GT(both.penetration[0], lens.penetration[0]);                 // penetration counts all melt
 }
 
 TEST(Nugget, RingShapedMeltHasNoHeightOnTheAxis) {
@@ -116,4 +117,5 @@ TEST(Nugget, RingShapedMeltHasNoHeightOnTheAxis) {
   EXPECT_NEAR(n.diameter, 2 * 2.5e-3, 1e-6);
   EXPECT_EQ(n.height, 0.0);
   EXPECT_NEAR(n.extent, 2 * 0.5e-3, 2e-6);
+  EXPECT_NEAR(n.unmolten_thickness, 2e-3, 1e-15);  // the axis is solid through the stack
 }

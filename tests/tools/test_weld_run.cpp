@@ -606,8 +606,8 @@ TEST(WeldRun, FoldedCellFailsTheRunSayingWhereAndWhen) {
 // 114.1, 114.7, 115.6, 116.4, 116.9, 117.04, 117.09, 117.15 µΩ: a smooth knee, where
 // the end-of-weld growth of the E/S contact stops reaching the end of the feature
 // window), and at 0.02 the knee's curvature alone gives 13 % of the change over the
-// prior. Measured: R_γ 4.2 %, T_max and d_n,sol below 1 % of their change over the
-// whole prior, P1 from 1e-3 to 1e-1; the remainder is of contact-front and bonding
+// prior. Measured: R_γ 1.4 %, T_max, d_n,sol and h_n,liq (on the axis) 0.1–0.2 % of
+// their change over the whole prior, P1 from 1e-3 to 1e-1; the remainder is of contact-front and bonding
 // events that happen per point and per time step. The bound, 10 %, is the
 // resolution a Gaussian-process surrogate with a nugget needs to see the trend.
 TEST(WeldRun, NumericalNoiseInP1IsSmallAgainstTheChangeOverThePrior) {
@@ -618,15 +618,16 @@ TEST(WeldRun, NumericalNoiseInP1IsSmallAgainstTheChangeOverThePrior) {
     nlohmann::json summary;
     const auto features =
         coarse_features(base / tag, std::string(" --set contact.electrode_sheet.htc_p1=") + value, &summary);
-    return std::array<double, 3>{features.at("R_gamma").at("value").get<double>(),
+    return std::array<double, 4>{features.at("R_gamma").at("value").get<double>(),
                                  features.at("T_max").at("value").get<double>(),
-                                 summary.at("nugget").at("d_n_sol").get<double>()};
+                                 summary.at("nugget").at("d_n_sol").get<double>(),
+                                 summary.at("nugget").at("h_n_liq").get<double>()};
   };
-  std::vector<std::array<double, 3>> sweep;
+  std::vector<std::array<double, 4>> sweep;
   for (int k = 0; k < 5; ++k) sweep.push_back(features_at(std::pow(10.0, -2.0 + 0.01 * k), "p" + std::to_string(k)));
   const auto low = features_at(1e-3, "low"), high = features_at(1e-1, "high");
-  const char* names[] = {"R_gamma", "T_max", "d_n_sol"};
-  for (int f = 0; f < 3; ++f) {
+  const char* names[] = {"R_gamma", "T_max", "d_n_sol", "h_n_liq"};
+  for (int f = 0; f < 4; ++f) {
     double noise = 0;
     for (int k = 0; k + 2 < 5; ++k)
       noise = std::max(noise, std::abs(sweep[k + 2][f] - 2 * sweep[k + 1][f] + sweep[k][f]));

@@ -1,9 +1,8 @@
 #!/usr/bin/env bash
-# Where the default case stands against the plausibility ranges of docs/MODEL.md
-# (dynamic resistance peak 100-250 uOhm, electrode displacement 10-60 um, nugget
-# 4-6.5 mm, 10-20 % of the electrical energy in the nugget), and what moves it there:
-# the paper's case on the coarse mesh at welding currents of 5-8 kA, with the paper's
-# R30 domed faces and with flat faces (same 5.5 mm face diameter). One line per run.
+# What sets the default case's resistance peak, displacement, nugget and the nugget's
+# share of the electrical energy: the paper's case on the coarse mesh at welding
+# currents of 5-8 kA, with the paper's R30 domed faces and with flat faces (same 5.5 mm
+# face diameter). One line per run.
 #   bash validation/plausibility/sweep.sh [extra --set options]
 # The extra options come last and win: `--set mesh.base_size=0.25mm --set
 # mesh.weld_zone.levels=2` runs the sweep on the paper's mesh (about 2 min).

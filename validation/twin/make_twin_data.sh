@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The "measured" data of the twin experiments (README.md): one weld simulated by rsw at
 # known parameters — P1 = contact.electrode_sheet.htc_p1 = 0.02, every other value as in
-# validation/paper_case/weld.yaml — on the coarse mesh of tools/run_default.sh, with
+# validation/paper_case/weld.yaml — on the coarse mesh (0.5 mm base, one level), with
 # signals at every step and no field files (the settings of the studies' model.set),
 # then Gaussian noise added with a fixed seed by add_noise.py (its docstring lists the
 # noise). Writes validation/twin/data/: truth/ (the run), noise_free.csv,
