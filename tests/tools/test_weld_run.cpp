@@ -344,8 +344,10 @@ TEST(WeldRun, ElectrodeReachingSolidusWarnsOrStopsAsConfigured) {
   // (the plausibility guard's warnings follow, ExtremeSchedule... below).
   ASSERT_GE(j.at("warnings").size(), 1u);
   EXPECT_NE(j.at("warnings")[0].get<std::string>().find("above the solidus"), std::string::npos);
-  for (std::size_t k = 1; k < j.at("warnings").size(); ++k)
-    EXPECT_EQ(j.at("warnings")[k].get<std::string>().rfind("plausibility: ", 0), 0u) << j.at("warnings")[k];
+  for (std::size_t k = 1; k < j.at("warnings").size(); ++k) {
+    const std::string w = j.at("warnings")[k].get<std::string>();
+    EXPECT_TRUE(w.rfind("plausibility: ", 0) == 0 || w.rfind("numerics: ", 0) == 0) << w;
+  }
   const double t_melt = j.at("electrode_melting_time_s").get<double>();
   EXPECT_GT(t_melt, 0.010);
   EXPECT_LT(t_melt, 0.031);
@@ -357,6 +359,44 @@ TEST(WeldRun, ElectrodeReachingSolidusWarnsOrStopsAsConfigured) {
                         " --set solver.electrode_melting=stop", out), 0);
   EXPECT_NE(out.find("above the solidus of its material"), std::string::npos) << out;
   EXPECT_FALSE(fs::exists(base / "stop" / "summary.json"));
+  fs::remove_all(base);
+}
+
+// A weld step whose electro-thermal coupling fails whole is solved in parts, a finer
+// time discretisation than its neighbours' in the parameters get: the run says so. With
+// at most 3 coupling iterations per attempt (the default allows 60) steps that need
+// more are split; summary.json counts the splits and carries one "numerics: " warning
+// with that count and the end of the first such step; the same weld with the default
+// budget splits none and has no such warning.
+TEST(WeldRun, StepsSolvedInPartsAreReportedAsANumericsWarning) {
+  const std::string args = " -q" + coarse_signals_only +
+                           " --set \"schedule.current=[[0 ms,0 kA],[10 ms,8 kA],[30 ms,8 kA],[31 ms,0 kA]]\""
+                           " --set \"schedule.force=[[0 ms,3 kN],[31 ms,3 kN]]\" --set schedule.cool_time=0ms";
+  const fs::path base = fs::temp_directory_path() / ("rsw_split_" + std::to_string(::getpid()));
+  const auto numerics_warnings = [](const nlohmann::json& j) {
+    std::vector<std::string> found;
+    for (const auto& w : j.at("warnings"))
+      if (w.get<std::string>().rfind("numerics: ", 0) == 0) found.push_back(w.get<std::string>());
+    return found;
+  };
+  std::string out;
+  ASSERT_EQ(run_rsw("simulate " + paper_case + " -o " + (base / "split").string() + args +
+                        " --set solver.max_coupling_iterations=3", out), 0) << out;
+  std::ifstream in(base / "split" / "summary.json");
+  const auto j = nlohmann::json::parse(in);
+  const int splits = j.at("coupling_substep_splits").get<int>();
+  ASSERT_GT(splits, 0);
+  const auto warned = numerics_warnings(j);
+  ASSERT_EQ(warned.size(), 1u) << j.at("warnings").dump(1);
+  EXPECT_NE(warned[0].find("did not converge on a whole weld step " + std::to_string(splits) + " time"),
+            std::string::npos) << warned[0];
+  EXPECT_NE(warned[0].find(" ms), so those steps were solved in parts"), std::string::npos) << warned[0];
+
+  ASSERT_EQ(run_rsw("simulate " + paper_case + " -o " + (base / "whole").string() + args, out), 0) << out;
+  std::ifstream in_whole(base / "whole" / "summary.json");
+  const auto whole = nlohmann::json::parse(in_whole);
+  EXPECT_EQ(whole.at("coupling_substep_splits").get<int>(), 0);
+  EXPECT_TRUE(numerics_warnings(whole).empty()) << whole.at("warnings").dump(1);
   fs::remove_all(base);
 }
 
