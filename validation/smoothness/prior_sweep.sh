@@ -1,34 +1,45 @@
 #!/usr/bin/env bash
-# The paper's Fig. 6 diagnostic (docs/VERIFICATION.md) over the whole P1 prior: the paper's case
-# on the coarse mesh at N values of log10 P1 evenly spaced over [-3, -1] (the E/S HTC
-# constant's prior, Table I), the signal features of each run (`rsw features`) and the
-# nugget and imprint features of its summary.json, and for each feature the residual
-# after detrending — a least-squares polynomial of degree D in log10 P1 — relative to the feature's range over the sweep. Noise shows
-# as residuals that do not shrink when D grows; a smooth trend's residual falls
-# quickly with D. A sharp bend of the trend (a nugget reaching the sheet surfaces) also
-# leaves a residual, so each line also gives the noise itself, estimated from third
-# differences of the equally spaced values, which a smooth trend hardly has: for
-# independent noise of standard deviation s, E[(Δ³y)²] = C(6,3) s² = 20 s² (the
-# difference-based variance estimator; Hall, Kay & Titterington, Biometrika 77, 1990, 521).
+# The paper's Fig. 6 diagnostic (docs/VERIFICATION.md) over a whole prior: a weld case
+# (the paper's, on the coarse mesh) at N values of the log10 of one parameter, evenly
+# spaced over its prior (P1, the E/S HTC constant, over [-3, -1] by default: Table I),
+# the signal features of each run (`rsw features`) and the nugget and imprint
+# features of its summary.json, and for each feature the residual after detrending —
+# a least-squares polynomial of degree D in the log10 of the parameter — relative to
+# the feature's range over the sweep. Noise shows as residuals that do not shrink when
+# D grows; a smooth trend's residual falls quickly with D. A sharp bend of the trend
+# (a nugget reaching the sheet surfaces) also leaves a residual, so each line also
+# gives the noise itself, estimated from third differences of the equally spaced
+# values, which a smooth trend hardly has: for independent noise of standard deviation
+# s, E[(Δ³y)²] = C(6,3) s² = 20 s² (the difference-based variance estimator; Hall, Kay
+# & Titterington, Biometrika 77, 1990, 521).
 #   bash validation/smoothness/prior_sweep.sh [N=40] [D=6] [extra --set options]
-# Runs two at a time (about 1 min for N = 40 on two cores); prints one line per feature,
-# and writes every run's features to $CSV if that is set (one row per run).
-# The binary is build/tools/rsw, or $RSW.
+# Environment (defaults in brackets):
+#   CASE  the weld case [validation/paper_case/weld.yaml]
+#   KEY   the config key swept [contact.electrode_sheet.htc_p1]
+#   LO HI the log10 range of its value [-3 -1]
+#   UNIT  appended to each value, e.g. "m" for a film thickness [none]
+#   CSV   a file for every run's features, one row per run [not written]
+#   RSW   the binary [build/tools/rsw]
+# The coarse mesh is set first, so extra --set options (a finer mesh) override it.
+# Runs two at a time (about 1 min for N = 40 on two cores); prints one line per feature.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 n=${1:-40}; degree=${2:-6}; shift $(( $# > 2 ? 2 : $# )) || true
 rsw=${RSW:-build/tools/rsw}
+case_file=${CASE:-validation/paper_case/weld.yaml}
+key=${KEY:-contact.electrode_sheet.htc_p1}
+lo=${LO:--3}; hi=${HI:--1}; unit=${UNIT:-}
 out=$(mktemp -d)
 run() {
   local k=$1; shift
-  local p1
-  p1=$(/usr/bin/python3 -c "print(10**(-3+2*$k/($n-1)))")
-  if OMP_NUM_THREADS=1 "$rsw" simulate validation/paper_case/weld.yaml -q -o "$out/run$k" --set mesh.base_size=0.5mm \
-      --set mesh.weld_zone.levels=1 --set output.fields=false --set contact.electrode_sheet.htc_p1="$p1" "$@" \
+  local value
+  value=$(/usr/bin/python3 -c "print(10**($lo+($hi-($lo))*$k/($n-1)))")
+  if OMP_NUM_THREADS=1 "$rsw" simulate "$case_file" -q -o "$out/run$k" --set mesh.base_size=0.5mm \
+      --set mesh.weld_zone.levels=1 --set output.fields=false --set "$key=$value${unit:+ $unit}" "$@" \
       > "$out/log$k" 2>&1; then
     "$rsw" features "$out/run$k/signals.csv" -o "$out/run$k/features.json" > /dev/null 2>&1 || true
   else
-    echo "run $k (P1 = $p1) failed: $(tail -1 "$out/log$k")"
+    echo "run $k ($key = $value${unit:+ $unit}) failed: $(tail -1 "$out/log$k")"
   fi
 }
 for k in $(seq 0 $((n - 1))); do
@@ -36,10 +47,12 @@ for k in $(seq 0 $((n - 1))); do
   if (( k % 2 == 1 )); then wait; fi
 done
 wait
-/usr/bin/python3 - "$out" "$n" "$degree" "${CSV:-}" <<'PY'
+/usr/bin/python3 - "$out" "$n" "$degree" "${CSV:-}" "$key" "$lo" "$hi" <<'PY'
 import csv, json, os, sys
 import numpy as np
-out, n, degree, table = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), sys.argv[4]
+out, n, degree, table, key = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), sys.argv[4], sys.argv[5]
+lo, hi = float(sys.argv[6]), float(sys.argv[7])
+name_x = "log10_" + key.split(".")[-1]
 x, rows = [], []
 for k in range(n):
     path = f"{out}/run{k}/features.json"
@@ -47,7 +60,7 @@ for k in range(n):
         continue
     data = json.load(open(path))
     data = data.get("features", data)
-    x.append(-3 + 2 * k / (n - 1))
+    x.append(lo + (hi - lo) * k / (n - 1))
     row = {name: entry["value"] for name, entry in data.items()}
     # the nugget and imprint features of the run's summary (the calibration targets)
     nugget = json.load(open(f"{out}/run{k}/summary.json"))["nugget"]
@@ -57,10 +70,10 @@ x = np.array(x)
 if table:
     with open(table, "w", newline="") as f:
         w = csv.writer(f)
-        w.writerow(["log10_P1"] + list(rows[0]))
+        w.writerow([name_x] + list(rows[0]))
         for xi, r in zip(x, rows):
             w.writerow([f"{xi:.6g}"] + [r.get(name) for name in rows[0]])
-print(f"{len(x)} of {n} runs; residual after a degree-{degree} polynomial fit in log10 P1, "
+print(f"{len(x)} of {n} runs; residual after a degree-{degree} polynomial fit in log10 {key}, "
       f"relative to the feature's range over the sweep")
 for name in rows[0]:
     y = np.array([r.get(name, np.nan) if r.get(name) is not None else np.nan for r in rows], dtype=float)
