@@ -29,6 +29,11 @@ rsw=${RSW:-build/tools/rsw}
 case_file=${CASE:-validation/paper_case/weld.yaml}
 key=${KEY:-contact.electrode_sheet.htc_p1}
 lo=${LO:--3}; hi=${HI:--1}; unit=${UNIT:-}
+/usr/bin/python3 -c "import sys; lo, hi = float(sys.argv[1]), float(sys.argv[2]); assert lo < hi" "$lo" "$hi" 2> /dev/null ||
+  { echo "prior_sweep.sh: LO=$lo, HI=$hi: need two numbers (log10 of the swept value) with LO < HI" >&2; exit 2; }
+[[ -f "$case_file" ]] || { echo "prior_sweep.sh: CASE=$case_file: no such file" >&2; exit 2; }
+[[ "$n" =~ ^[0-9]+$ && "$degree" =~ ^[0-9]+$ ]] && (( n >= degree + 3 )) ||
+  { echo "prior_sweep.sh: N=$n, D=$degree: need whole numbers with N >= D + 3" >&2; exit 2; }
 out=$(mktemp -d)
 run() {
   local k=$1; shift
@@ -67,6 +72,8 @@ for k in range(n):
     row.update({name: nugget[name] for name in ("d_n_liq", "h_n_liq", "d_n_sol", "h_n_sol", "w_elec", "d_indent")})
     rows.append(row)
 x = np.array(x)
+if not rows:
+    sys.exit(f"prior_sweep.sh: none of the {n} runs succeeded (see the lines above)")
 if table:
     with open(table, "w", newline="") as f:
         w = csv.writer(f)
