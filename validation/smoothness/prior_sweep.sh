@@ -23,6 +23,9 @@
 # The coarse mesh is set first, so extra --set options (a finer mesh) override it.
 # Runs two at a time (about 1 min for N = 40 on two cores); prints one line per feature.
 set -euo pipefail
+# Paths the caller gives are read from the caller's folder, before the move to the repository.
+[[ -n "${CASE:-}" ]] && CASE=$(realpath -m -- "$CASE")
+[[ -n "${CSV:-}" ]] && CSV=$(realpath -m -- "$CSV")
 cd "$(dirname "$0")/../.."
 n=${1:-40}; degree=${2:-6}; shift $(( $# > 2 ? 2 : $# )) || true
 rsw=${RSW:-build/tools/rsw}
