@@ -321,10 +321,12 @@ void declare_solver(ConfigSchema& s) {
            "that the two sheets of a symmetric stack deform alike where they part at the contact edge (one "
            "pass shears the master sheet there until a cell folds; docs/MECHANICS.md).");
   s.number("solver.contact_smoothing", "m", "um").default_value("1 um")
-      .range(Range::closed(0, 10))
-      .doc("Width of the quadratic start of the C1 penalty contact law: contact stiffens over this much "
-           "penetration, of the order of the surface roughness (cold-rolled sheet and dressed caps: Ra about "
-           "1 um). Narrower widths make Newton cycle where contact points open and close in the melt.");
+      .range(Range::closed(0, 100))
+      .doc("Width of the quadratic start of the C1 penalty contact law, p = eps_N g^2/(2 delta) over the first "
+           "delta of penetration. Narrower than 1 um, Newton cycles where contact points open and close in the "
+           "melt; wider, a closing ring of contact takes its load over more approach, the features are "
+           "smoother in the parameters and the contact wider and softer, as on rough surfaces (30 um: "
+           "docs/VERIFICATION.md, 'Smoothness over the prior').");
   s.number("solver.coupling_tolerance", "K", "K").default_value("1e-2 K")
       .range(Range::closed(1e-9, 10))
       .doc("Electro-thermal coupling iterations stop when no nodal temperature changes by "
