@@ -31,12 +31,14 @@
 // the finest interface cell) and δ = contact_smoothing. The quadratic start keeps
 // the residual differentiable when a point enters contact, so Newton converges
 // quadratically instead of cycling between active sets, and contact outputs vary
-// smoothly. δ = 1 µm by default, the order of the surface roughness: the contact
-// stiffens over the first micrometre of penetration as asperities would (at 1 GPa
-// and ε_N ≈ 3·10¹⁶ Pa/m the penetration is √(2δ p/ε_N) ≈ 0.25 µm). With δ = 10 nm
-// Newton cycled on the paper's mesh where contact points open and close around the
-// first melt (measured: failure at 14 ms; 200 nm passes in 3529 iterations, 1 µm in
-// 1956). Bodies touching
+// smoothly. δ = 30 µm by default: at 0.2–1 GPa and ε_N ≈ 3·10¹⁶ Pa/m the
+// penetration is √(2δ p/ε_N) ≈ 0.6–1.4 µm, and a ring of contact that closes takes
+// its load gradually instead of in one step, which keeps the features smooth in the
+// parameters (docs/VERIFICATION.md, "Smoothness over the prior"); the contact is
+// wider and softer than between smooth surfaces, as roughness makes it (Johnson,
+// Contact Mechanics, 1985, ch. 13). With δ = 10 nm Newton cycled on the paper's mesh
+// where contact points open and close around the first melt (measured: failure at
+// 14 ms; 200 nm passes in 3529 iterations, 1 µm in 1956). Bodies touching
 // at a single point are not held by that, so seating (displacement control, see
 // physics/squeeze) puts the unsupported bodies on a weak elastic foundation until
 // contact carries them.

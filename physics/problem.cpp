@@ -320,13 +320,14 @@ void declare_solver(ConfigSchema& s) {
            "lower sheet (slave and master); two_pass adds the mirrored pass, each with half the area, so "
            "that the two sheets of a symmetric stack deform alike where they part at the contact edge (one "
            "pass shears the master sheet there until a cell folds; docs/MECHANICS.md).");
-  s.number("solver.contact_smoothing", "m", "um").default_value("1 um")
+  s.number("solver.contact_smoothing", "m", "um").default_value("30 um")
       .range(Range::closed(0, 100))
       .doc("Width of the quadratic start of the C1 penalty contact law, p = eps_N g^2/(2 delta) over the first "
-           "delta of penetration. Narrower than 1 um, Newton cycles where contact points open and close in the "
-           "melt; wider, a closing ring of contact takes its load over more approach, the features are "
-           "smoother in the parameters and the contact wider and softer, as on rough surfaces (30 um: "
-           "docs/VERIFICATION.md, 'Smoothness over the prior').");
+           "delta of penetration: with 30 um a contact under 0.2-1 GPa on the paper's mesh is 0.6-1.4 um deep, "
+           "and a closing ring of contact takes its load gradually, which keeps the features smooth in the "
+           "parameters; the contact is wider and softer than a smooth surface's, as on rough surfaces "
+           "(docs/VERIFICATION.md, 'Smoothness over the prior'). Below 1 um Newton cycles where contact "
+           "points open and close in the melt.");
   s.number("solver.coupling_tolerance", "K", "K").default_value("1e-2 K")
       .range(Range::closed(1e-9, 10))
       .doc("Electro-thermal coupling iterations stop when no nodal temperature changes by "
@@ -353,7 +354,7 @@ void declare_solver(ConfigSchema& s) {
       .range(Range::closed(0, 1e3))
       .doc("A mechanics step also ends once Newton contracts superlinearly and the estimated remaining "
            "displacement error |du_k|^2/|du_k-1| is below this, with the out-of-balance force within "
-           "100 times its tolerance (0: off). 1 nm is a thousandth of the contact smoothing width.");
+           "100 times its tolerance (0: off). 1 nm is a thousandth of a contact's penetration.");
   s.choice("solver.electrode_melting", {"continue", "stop"}).default_value("continue")
       .doc("When an electrode first reaches its solidus (melting: outside the model): continue "
            "warns (time, place, temperature in summary.json and results.h5) and goes on, outputs "
