@@ -47,6 +47,12 @@ lo=${LO:--3}; hi=${HI:--1}; unit=${UNIT:-}
 /usr/bin/python3 -c "import sys; lo, hi = float(sys.argv[1]), float(sys.argv[2]); assert lo < hi" "$lo" "$hi" 2> /dev/null ||
   { echo "prior_sweep.sh: LO=$lo, HI=$hi: need two numbers (log10 of the swept value) with LO < HI" >&2; exit 2; }
 [[ -f "$case_file" ]] || { echo "prior_sweep.sh: CASE=$case_file: no such file" >&2; exit 2; }
+for bound in MAX_NOISE MAX_NOISE_ALL; do
+  [[ -z "${!bound:-}" ]] || /usr/bin/python3 -c "import sys; assert float(sys.argv[1]) > 0" "${!bound}" 2> /dev/null ||
+    { echo "prior_sweep.sh: $bound=${!bound}: need a positive number (per cent of the range)" >&2; exit 2; }
+done
+[[ -z "${MAX_NOISE_ALL:-}" || -n "${MAX_NOISE:-}" ]] ||
+  { echo "prior_sweep.sh: MAX_NOISE_ALL=$MAX_NOISE_ALL needs MAX_NOISE as well" >&2; exit 2; }
 [[ "$n" =~ ^[0-9]+$ && "$degree" =~ ^[0-9]+$ ]] && (( n >= degree + 3 )) ||
   { echo "prior_sweep.sh: N=$n, D=$degree: need whole numbers with N >= D + 3" >&2; exit 2; }
 out=$(mktemp -d)
@@ -77,8 +83,6 @@ lo, hi = float(sys.argv[6]), float(sys.argv[7])
 max_noise = float(sys.argv[8]) if sys.argv[8] else None
 targets = sys.argv[9].split(",")
 max_all = float(sys.argv[10]) if sys.argv[10] else None
-if max_all is not None and max_noise is None:
-    sys.exit("prior_sweep.sh: MAX_NOISE_ALL needs MAX_NOISE")
 name_x = "log10_" + key.split(".")[-1]
 x, rows = [], []
 for k in range(n):
