@@ -1,6 +1,8 @@
 // Pattern, colouring and condensed scatter of the assembly loop; see assembler.hpp.
 #include "fem/assembler.hpp"
 
+#include "fem/threads.hpp"
+
 #include <omp.h>
 
 #include <algorithm>
@@ -300,23 +302,26 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
     if (partitioned_threads_ != n_threads) partition(n_threads);
     std::exception_ptr failure;
     std::atomic<bool> failed{false};
-#pragma omp parallel
     {
-      LocalSystem local;
-      for (int b = omp_get_thread_num(); b < n_threads; b += omp_get_num_threads())
-        for (const int e : blocks_[b]) {
-          if (failed.load(std::memory_order_relaxed)) break;
-          try {
-            local.matrix.setZero(n_local, n_local);
-            local.vector.setZero(n_local);
-            local.matrix_kept = false;
-            cell_kernel(e, local);
-            scatter_cell(e, local);
-          } catch (...) {
+      const TeamRegion team;  // this loop on the process's threads (fem/threads.hpp)
+#pragma omp parallel
+      {
+        LocalSystem local;
+        for (int b = omp_get_thread_num(); b < n_threads; b += omp_get_num_threads())
+          for (const int e : blocks_[b]) {
+            if (failed.load(std::memory_order_relaxed)) break;
+            try {
+              local.matrix.setZero(n_local, n_local);
+              local.vector.setZero(n_local);
+              local.matrix_kept = false;
+              cell_kernel(e, local);
+              scatter_cell(e, local);
+            } catch (...) {
 #pragma omp critical(rsw_assembler_failure)
-            if (!failed.exchange(true)) failure = std::current_exception();
+              if (!failed.exchange(true)) failure = std::current_exception();
+            }
           }
-        }
+      }
     }
     if (failure) std::rethrow_exception(failure);
   }

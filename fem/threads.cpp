@@ -12,9 +12,12 @@
 #include <string>
 
 namespace rsw::fem {
+bool team_requested();
 namespace {
 // Set by use_threads(1): every parallel region is inactive (max-active-levels 0).
 std::atomic<bool> g_regions_inline{false};
+// Number of live TeamRegion objects on this thread.
+thread_local int g_team_regions = 0;
 }  // namespace
 
 void use_threads(int n) {
@@ -31,6 +34,11 @@ void use_threads(int n) {
 
 bool parallel_regions_run_inline() { return g_regions_inline.load(std::memory_order_relaxed); }
 
+TeamRegion::TeamRegion() { ++g_team_regions; }
+TeamRegion::~TeamRegion() { --g_team_regions; }
+
+bool team_requested() { return g_team_regions > 0; }
+
 }  // namespace rsw::fem
 
 // GCC's entry point for `#pragma omp parallel` (libgomp's ABI since GCC 4.9: the
@@ -44,12 +52,14 @@ bool parallel_regions_run_inline() { return g_regions_inline.load(std::memory_or
 // time; docs/PERFORMANCE.md). Here such a region runs as the body called on this
 // thread, which is what OpenMP defines for code outside any parallel region: worksharing
 // loops, single, critical and tasks behave as orphaned constructs of one thread. Only
-// omp_get_level() inside the body differs (0 instead of 1). With n > 1 threads a
-// region asking for more than n (CHOLMOD's num_threads(4)) gets n, as OpenMP allows an
-// implementation to give fewer threads than requested, and the call goes on to the
-// OpenMP runtime's own definition.
+// omp_get_level() inside the body differs (0 instead of 1). With n > 1 threads the
+// same holds for every region not opened under a TeamRegion (CHOLMOD's above: on two
+// threads its regions cost more in synchronisation than they gained); a TeamRegion's
+// region asking for more than n gets n, as OpenMP allows an implementation to give
+// fewer threads than requested, and the call goes on to the OpenMP runtime's own
+// definition.
 extern "C" void GOMP_parallel(void (*body)(void*), void* data, unsigned num_threads, unsigned flags) {
-  if (rsw::fem::parallel_regions_run_inline()) {
+  if (rsw::fem::parallel_regions_run_inline() || !rsw::fem::team_requested()) {
     body(data);
     return;
   }

@@ -1,7 +1,8 @@
 // use_threads: a library's parallel region with a fixed thread request (as CHOLMOD's
-// supernodal factorisation has, num_threads(4)) runs on one thread when the process
-// asked for one, and then without an OpenMP team; the shared libraries reach that
-// entry point.
+// supernodal factorisation has, num_threads(4)) runs on the calling thread, without an
+// OpenMP team, whatever the process's thread count; only a region opened under a
+// TeamRegion (rsw's assembly loop) gets the process's threads, at most. The shared
+// libraries reach that entry point.
 #include "fem/threads.hpp"
 
 #include <dlfcn.h>
@@ -31,8 +32,8 @@ TEST(Threads, OneThreadAlsoHoldsForALibrarysFixedThreadRequest) {
 }
 
 // With one thread a region is its body called on this thread: no team (level 0, where
-// libgomp's inactive team of one reports level 1), every loop iteration done once.
-// With two threads the runtime forms a team again.
+// libgomp's inactive team of one reports level 1), every loop iteration done once,
+// even under a TeamRegion. With two threads a TeamRegion's region gets a team again.
 TEST(Threads, OneThreadRunsAParallelRegionWithoutATeam) {
   const auto region = [](int& level, int& iterations) {
     level = -1;
@@ -48,12 +49,18 @@ TEST(Threads, OneThreadRunsAParallelRegionWithoutATeam) {
   int level = 0, iterations = 0;
   rsw::fem::use_threads(1);
   EXPECT_TRUE(rsw::fem::parallel_regions_run_inline());
-  region(level, iterations);
+  {
+    const rsw::fem::TeamRegion team;
+    region(level, iterations);
+  }
   EXPECT_EQ(level, 0);
   EXPECT_EQ(iterations, 100);
   rsw::fem::use_threads(2);
   EXPECT_FALSE(rsw::fem::parallel_regions_run_inline());
-  region(level, iterations);
+  {
+    const rsw::fem::TeamRegion team;
+    region(level, iterations);
+  }
   EXPECT_EQ(level, 1);
   EXPECT_EQ(iterations, 100);
   rsw::fem::use_threads(1);
@@ -73,20 +80,32 @@ TEST(Threads, SharedLibrariesFindTheExecutablesParallelEntryPoint) {
   EXPECT_NE(std::string(where.dli_fname).find("gomp"), std::string::npos) << where.dli_fname;
 }
 
-// n threads mean n, whatever the machine's load (no dynamic adjustment), and a fixed
-// request for four is cut to them.
-TEST(Threads, SeveralThreadsRunOurLoopsAndALibrarysFixedRequestOnThatMany) {
+// n threads mean n for a TeamRegion's loop, whatever the machine's load (no dynamic
+// adjustment), and its fixed request for four is cut to them. A region outside any
+// TeamRegion, as a library's, runs on the calling thread alone.
+TEST(Threads, SeveralThreadsRunOurLoopsOnThatManyAndALibrarysRegionOnTheCallingThread) {
   rsw::fem::use_threads(2);
   EXPECT_EQ(omp_get_max_threads(), 2);
   EXPECT_FALSE(omp_get_dynamic());
   int n = 0;
+  {
+    const rsw::fem::TeamRegion team;
+#pragma omp parallel
+    {
+#pragma omp single
+      n = omp_get_num_threads();
+    }
+    EXPECT_EQ(n, 2);
+    EXPECT_EQ(threads_of_a_fixed_request_of_four(), 2);
+  }
+  EXPECT_EQ(threads_of_a_fixed_request_of_four(), 1);
+  int level = -1;
 #pragma omp parallel
   {
 #pragma omp single
-    n = omp_get_num_threads();
+    level = omp_get_level();
   }
-  EXPECT_EQ(n, 2);
-  EXPECT_EQ(threads_of_a_fixed_request_of_four(), 2);
+  EXPECT_EQ(level, 0);
   rsw::fem::use_threads(1);
 }
 
