@@ -2,6 +2,8 @@
 // feature_emulator.hpp.
 #include "calibration/feature_emulator.hpp"
 
+#include "fem/threads.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -157,6 +159,7 @@ FeaturePrediction FeatureEmulator::predict_global(const Eigen::MatrixXd& points)
   // so each block is computed the same way whatever the thread count.
   constexpr Eigen::Index block = 128;
   const Eigen::Index n_blocks = (m + block - 1) / block;
+  const fem::TeamRegion team;  // the process's threads (fem/threads.hpp)
 #pragma omp parallel for schedule(dynamic) if (n_blocks > 1)
   for (Eigen::Index b = 0; b < n_blocks; ++b) {
     const Eigen::Index start = b * block, rows = std::min(block, m - start);

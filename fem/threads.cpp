@@ -53,13 +53,15 @@ bool team_requested() { return g_team_regions > 0; }
 // thread, which is what OpenMP defines for code outside any parallel region: worksharing
 // loops, single, critical and tasks behave as orphaned constructs of one thread. Only
 // omp_get_level() inside the body differs (0 instead of 1). With n > 1 threads the
-// same holds for every region not opened under a TeamRegion (CHOLMOD's above: on two
-// threads its regions cost more in synchronisation than they gained); a TeamRegion's
-// region asking for more than n gets n, as OpenMP allows an implementation to give
-// fewer threads than requested, and the call goes on to the OpenMP runtime's own
-// definition.
+// same holds for every region opened outside any team and not under a TeamRegion
+// (CHOLMOD's above: on two threads its regions cost more in synchronisation than they
+// gained). A TeamRegion's region asking for more than n gets n, as OpenMP allows an
+// implementation to give fewer threads than requested, and a region opened inside a
+// team (nested) gets the runtime's inactive team of one: both calls go on to the
+// OpenMP runtime's own definition. (Run inline inside a team, a nested region's
+// worksharing would bind to the enclosing team and split its loop.)
 extern "C" void GOMP_parallel(void (*body)(void*), void* data, unsigned num_threads, unsigned flags) {
-  if (rsw::fem::parallel_regions_run_inline() || !rsw::fem::team_requested()) {
+  if (rsw::fem::parallel_regions_run_inline() || (!rsw::fem::team_requested() && omp_get_level() == 0)) {
     body(data);
     return;
   }

@@ -34,8 +34,8 @@ void use_threads(int n);
 bool parallel_regions_run_inline();
 
 // While one lives on a thread, the parallel regions that thread opens get the team of
-// use_threads(n) (at most n threads). Regions opened inside the team (by its threads)
-// run on the thread that opens them.
+// use_threads(n) (at most n threads). A region opened inside the team, by any of its
+// threads, runs on the thread that opens it (the OpenMP runtime's inactive team of one).
 class TeamRegion {
  public:
   TeamRegion();

@@ -8,7 +8,10 @@
 
 #include <gtest/gtest.h>
 
+#include <omp.h>
+
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -121,6 +124,34 @@ TEST(Assembler, ExceptionOfACellKernelReachesTheCaller) {
                  std::runtime_error);
   }
   fem::use_threads(1);
+}
+
+// With two threads the cell loop runs on both (its region is a fem::TeamRegion; any
+// other region runs on the calling thread alone), and the result is the one-thread one
+// to round-off (the cells along the block border are added after the blocks).
+TEST(Assembler, TwoThreadsShareTheCellLoopAndGiveTheOneThreadResult) {
+  const fem::Mesh mesh = small_mesh();
+  fem::DofMap dofs(mesh, 1);
+  fem::Constraints c(dofs.n_dofs());
+  c.add_hanging_nodes(mesh, dofs);
+  c.close();
+  fem::Assembler assembler(mesh, dofs, c);
+  fem::SparseMatrix K1, K2;
+  Eigen::VectorXd F1, F2;
+  fem::use_threads(1);
+  assembler.assemble([&](int e, fem::LocalSystem& l) { laplace_kernel(mesh, e, l); }, K1, F1);
+  fem::use_threads(2);
+  std::atomic<int> seen{0};  // bit t: thread t ran a cell kernel
+  assembler.assemble(
+      [&](int e, fem::LocalSystem& l) {
+        seen.fetch_or(1 << omp_get_thread_num());
+        laplace_kernel(mesh, e, l);
+      },
+      K2, F2);
+  fem::use_threads(1);
+  EXPECT_EQ(seen.load(), 3);
+  EXPECT_LE((Eigen::MatrixXd(K2) - Eigen::MatrixXd(K1)).norm(), 1e-14 * Eigen::MatrixXd(K1).norm());
+  EXPECT_LE((F2 - F1).norm(), 1e-14 * F1.norm());
 }
 
 // Incremental cell matrices: a sequence of assemblies in which some cells change

@@ -109,6 +109,35 @@ TEST(Threads, SeveralThreadsRunOurLoopsOnThatManyAndALibrarysRegionOnTheCallingT
   rsw::fem::use_threads(1);
 }
 
+// A region opened inside a TeamRegion's team, by any of its threads, is a team of its
+// own (the runtime's inactive one): its worksharing loop gives that thread every
+// iteration, not the share of the enclosing team.
+TEST(Threads, ARegionNestedInOurTeamRunsItsLoopWholeOnEachThread) {
+  rsw::fem::use_threads(2);
+  int counts[2] = {-1, -1};
+  int team = 0;
+  {
+    const rsw::fem::TeamRegion region;
+#pragma omp parallel
+    {
+      const int t = omp_get_thread_num();
+#pragma omp single
+      team = omp_get_num_threads();
+      int n = 0;
+#pragma omp parallel
+      {
+#pragma omp for schedule(static) reduction(+ : n)
+        for (int i = 0; i < 100; ++i) n += 1;
+      }
+      if (t < 2) counts[t] = n;
+    }
+  }
+  rsw::fem::use_threads(1);
+  EXPECT_EQ(team, 2);
+  EXPECT_EQ(counts[0], 100);
+  EXPECT_EQ(counts[1], 100);
+}
+
 TEST(Threads, ZeroThreadsAreRejected) {
   EXPECT_THROW(rsw::fem::use_threads(0), std::invalid_argument);
 }

@@ -128,11 +128,12 @@ for name in rows[0]:
     noise = np.sqrt(np.mean(d3 ** 2) / 20)
     robust = 1.4826 * np.median(np.abs(d3)) / np.sqrt(20)
     xs = x[ok]
+    jump = 5 * np.sqrt(20) * robust  # five standard deviations of the noise's third difference
     jumps, k = [], 0
     while k < len(d3):  # merge overlapping windows of four runs
-        if robust > 0 and abs(d3[k]) > 5 * np.sqrt(20) * robust:
+        if robust > 0 and abs(d3[k]) > jump:
             first = k
-            while k + 1 < len(d3) and abs(d3[k + 1]) > 5 * np.sqrt(20) * robust:
+            while k + 1 < len(d3) and abs(d3[k + 1]) > jump:
                 k += 1
             jumps.append(f"{xs[first]:.3f}..{xs[k + 3]:.3f}")
         k += 1
