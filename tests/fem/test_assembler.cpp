@@ -130,12 +130,9 @@ TEST(Assembler, ExceptionOfACellKernelReachesTheCaller) {
 // other region runs on the calling thread alone), and the result is the one-thread one
 // to round-off (the cells along the block border are added after the blocks).
 TEST(Assembler, TwoThreadsShareTheCellLoopAndGiveTheOneThreadResult) {
-  const fem::Mesh mesh = small_mesh();
-  fem::DofMap dofs(mesh, 1);
-  fem::Constraints c(dofs.n_dofs());
-  c.add_hanging_nodes(mesh, dofs);
-  c.close();
-  fem::Assembler assembler(mesh, dofs, c);
+  const ConstrainedScalarMesh p;
+  const fem::Mesh& mesh = p.mesh;
+  fem::Assembler assembler(mesh, p.dofs, p.c);
   fem::SparseMatrix K1, K2;
   Eigen::VectorXd F1, F2;
   fem::use_threads(1);
