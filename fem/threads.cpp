@@ -12,12 +12,12 @@
 #include <string>
 
 namespace rsw::fem {
-bool team_requested();
 namespace {
 // Set by use_threads(1): every parallel region is inactive (max-active-levels 0).
 std::atomic<bool> g_regions_inline{false};
 // Number of live TeamRegion objects on this thread.
 thread_local int g_team_regions = 0;
+bool team_requested() { return g_team_regions > 0; }
 }  // namespace
 
 void use_threads(int n) {
@@ -36,8 +36,6 @@ bool parallel_regions_run_inline() { return g_regions_inline.load(std::memory_or
 
 TeamRegion::TeamRegion() { ++g_team_regions; }
 TeamRegion::~TeamRegion() { --g_team_regions; }
-
-bool team_requested() { return g_team_regions > 0; }
 
 }  // namespace rsw::fem
 

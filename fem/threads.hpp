@@ -8,24 +8,25 @@
 // active-levels limit and dynamic adjustment (OpenMP 5.1, sections 2.6.1 and 3.2.x);
 // the latter also cuts our loops by the machine's load average, so rsw instead
 // defines the entry point of parallel regions itself (threads.cpp, GOMP_parallel): only
-// rsw's own loops, marked by a TeamRegion, get a team, of the process's thread count. VTK's own loops (vtkSMPTools, in the .vtu
-// writers) run on TBB threads in Debian's build, which ask the system for the number of
-// processors on every loop and spin in sched_yield after it (measured on the coarse
-// weld: 7657 reads of /sys/devices/system/cpu/online and 105 000 sched_yield calls, a
-// second thread busy for about 9 % of the run): the VTK writers (fem/vtk_output.cpp)
-// select VTK's sequential backend on one thread. And with one thread a parallel region runs without an OpenMP team at all
-// (threads.cpp, GOMP_parallel): a team of one still makes a futex system call at each
-// of its barriers.
+// rsw's own loops, marked by a TeamRegion, get a team, of the process's thread count.
+// VTK's own loops (vtkSMPTools, in the .vtu writers) run on TBB threads in Debian's
+// build, which ask the system for the number of processors on every loop and spin in
+// sched_yield after it (measured on the coarse weld: 7657 reads of
+// /sys/devices/system/cpu/online and 105 000 sched_yield calls, a second thread busy
+// for about 9 % of the run): the VTK writers (fem/vtk_output.cpp) select VTK's
+// sequential backend on one thread. And with one thread a parallel region runs without
+// an OpenMP team at all (threads.cpp, GOMP_parallel): a team of one still makes a futex
+// system call at each of its barriers.
 #pragma once
 
 namespace rsw::fem {
 
 // n == 1: every parallel region, ours and the libraries', runs on the calling thread
 // (max-active-levels 0, no OpenMP team; VTK's writers sequential). n > 1: a region
-// opened under a TeamRegion (the assembly loop) runs on n threads; every other region,
-// a library's included, still runs on the calling thread. CHOLMOD's supernodal
-// factorisation opens a region per supernode, and on two threads those made the
-// default weld slower than on one (docs/PERFORMANCE.md).
+// opened under a TeamRegion (the assembly loop, the feature emulator's blocks) runs on
+// n threads; every other region, a library's included, still runs on the calling
+// thread. CHOLMOD's supernodal factorisation opens a region per supernode, and on two
+// threads those made the default weld slower than on one (docs/PERFORMANCE.md).
 // Throws std::invalid_argument for n < 1.
 void use_threads(int n);
 
