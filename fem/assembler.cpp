@@ -114,12 +114,21 @@ void Assembler::partition(int n_threads) const {
   // cells close together); a cell all of whose free dofs are touched only by cells of
   // its own block is assembled by that block's thread, the others (along the block
   // borders) serially afterwards. No two threads then write the same entry.
+  // Under a mirror only the evaluated cells count (set_mirror), so that each thread
+  // gets a share of the upper half.
   const int n_cells = mesh_.n_cells();
   blocks_.assign(n_threads, {});
   border_cells_.clear();
   std::vector<char> serial(n_cells, 0);
   for (int e : serial_cells_) serial[e] = 1;
-  auto block_of = [&](int e) { return static_cast<int>(static_cast<long>(e) * n_threads / n_cells); };
+  std::vector<int> rank(n_cells);
+  int n_evaluated = 0;
+  for (int e = 0; e < n_cells; ++e) {
+    rank[e] = n_evaluated;
+    if (weight_.empty() || weight_[e] != 0.0) ++n_evaluated;
+    else serial[e] = 1;  // in no block: never evaluated
+  }
+  auto block_of = [&](int e) { return static_cast<int>(static_cast<long>(rank[e]) * n_threads / n_evaluated); };
   std::vector<int> owner(constraints_.n_free(), -1);  // block of the cells touching a dof; -2: several
   for (int e = 0; e < n_cells; ++e) {
     if (serial[e]) continue;
@@ -253,6 +262,24 @@ void Assembler::scatter_cached(int cell, const LocalSystem& local, Eigen::Vector
   cache_scattered_.fetch_add(1, std::memory_order_relaxed);
 }
 
+void Assembler::set_mirror(const MirrorSymmetry& mirror) {
+  weight_.clear();
+  partitioned_threads_ = 0;  // the threads' blocks follow the evaluated cells
+  if (mirror.empty()) return;
+  if (static_cast<int>(mirror.image_of.size()) != mesh_.n_nodes())
+    throw std::invalid_argument("Assembler::set_mirror: the mirror is of another mesh");
+  const int nc = dofs_.n_components();
+  const int node_dofs = nc * mesh_.n_nodes();
+  weight_.resize(element_dofs_.size());
+  std::vector<int> nodes;
+  for (std::size_t e = 0; e < element_dofs_.size(); ++e) {
+    nodes.clear();
+    for (int d : element_dofs_[e])
+      if (d < node_dofs) nodes.push_back(d / nc);  // extra dofs (a rigid face) belong to no half
+    weight_[e] = mirror.weight(nodes);
+  }
+}
+
 void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F, bool homogeneous,
                          bool assemble_matrix) const {
   const CellKernel& cell_kernel = terms.cells;
@@ -269,7 +296,13 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
     std::fill(cache_sum_.begin(), cache_sum_.end(), 0.0);
     cache_complete_ = false;
   }
-  auto scatter_cell = [&](int e, const LocalSystem& local) {
+  auto scatter_cell = [&](int e, LocalSystem& local) {
+    // A cell the mirror plane cuts counts half (fem/mirror.hpp); a kept matrix is the
+    // cache's copy, already weighted.
+    if (!weight_.empty() && weight_[e] != 1.0) {
+      if (!local.matrix_kept) local.matrix *= weight_[e];
+      local.vector *= weight_[e];
+    }
     if (cached)
       scatter_cached(e, local, F, homogeneous, rebuild);
     else
@@ -288,6 +321,7 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
     // misses: docs/PERFORMANCE.md).
     LocalSystem local;
     for (int e = 0; e < mesh_.n_cells(); ++e) {
+      if (!weight_.empty() && weight_[e] == 0.0) continue;
       local.matrix.setZero(n_local, n_local);
       local.vector.setZero(n_local);
       local.matrix_kept = false;
@@ -310,6 +344,7 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
         for (int b = omp_get_thread_num(); b < n_threads; b += omp_get_num_threads())
           for (const int e : blocks_[b]) {
             if (failed.load(std::memory_order_relaxed)) break;
+            if (!weight_.empty() && weight_[e] == 0.0) continue;
             try {
               local.matrix.setZero(n_local, n_local);
               local.vector.setZero(n_local);
@@ -331,6 +366,7 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
   if (cell_kernel && omp_get_max_threads() > 1)
     for (const std::vector<int>* cells : std::array<const std::vector<int>*, 2>{&border_cells_, &serial_cells_})
       for (int e : *cells) {
+        if (!weight_.empty() && weight_[e] == 0.0) continue;
         local.matrix.setZero(n_local, n_local);
         local.vector.setZero(n_local);
         local.matrix_kept = false;
@@ -344,20 +380,32 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
   }
   for (const auto& term : terms.faces)
     for (const auto& face : *term.faces) {
+      const double w = weight_.empty() ? 1.0 : weight_[face.cell];
+      if (w == 0.0) continue;
       local.matrix.setZero(n_local, n_local);
       local.vector.setZero(n_local);
       local.matrix_kept = false;
       term.kernel(face, local);
+      if (w != 1.0) {
+        local.matrix *= w;
+        local.vector *= w;
+      }
       scatter(face.cell, local, K, F, homogeneous, assemble_matrix);
     }
   if (terms.groups) {
     const int n_cells = mesh_.n_cells();
     for (int g = 0; g < n_groups(); ++g) {
+      const double w = weight_.empty() ? 1.0 : weight_[n_cells + g];
+      if (w == 0.0) continue;
       const int n = static_cast<int>(element_dofs_[n_cells + g].size());
       local.matrix.setZero(n, n);
       local.vector.setZero(n);
       local.matrix_kept = false;
       terms.groups(g, local);
+      if (w != 1.0) {
+        local.matrix *= w;
+        local.vector *= w;
+      }
       scatter(n_cells + g, local, K, F, homogeneous, assemble_matrix);
     }
   }

@@ -36,6 +36,7 @@
 #include "fem/constraints.hpp"
 #include "fem/dof_map.hpp"
 #include "fem/mesh.hpp"
+#include "fem/mirror.hpp"
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
@@ -90,6 +91,14 @@ class Assembler {
   // assemblies so far, and cells whose unchanged matrix was skipped (cache only).
   long cell_matrices_scattered() const { return cache_scattered_; }
   long cell_matrices_reused() const { return cache_reused_; }
+
+  // Assembles the upper half of a mirror-symmetric problem only (fem/mirror.hpp): each
+  // cell with its boundary faces, and each coupling group, weighted by its nodes (1,
+  // 1/2, or 0: not evaluated). The constraints must hold the images
+  // (add_mirror_constraints). An empty mirror assembles every term again.
+  void set_mirror(const MirrorSymmetry& mirror);
+  // Weight of cell e in the assembly: 1 without a mirror.
+  double cell_weight(int e) const { return weight_.empty() ? 1.0 : weight_[e]; }
 
   // Assembles K_red and F_red. `cell_kernel` may be empty (face terms only) and the
   // matrix may be skipped (assemble_matrix = false, e.g. for a residual check).
@@ -160,6 +169,8 @@ class Assembler {
   mutable int cache_assemblies_ = 0;            // matrix assemblies since the last rebuild (mod 64)
   mutable bool cache_complete_ = false;         // cache_sum_ holds every kept matrix
   mutable std::atomic<long> cache_scattered_{0}, cache_reused_{0};
+  // Per element (cells, then groups), with a mirror: 1, 1/2 or 0 (set_mirror); else empty.
+  std::vector<double> weight_;
 };
 
 }  // namespace rsw::fem
