@@ -222,4 +222,28 @@ fem::Mesh weld_mesh(const StackGeometry& stack, const MeshSettings& settings) {
   return mesh;
 }
 
+std::vector<int> mirror_bodies(const StackGeometry& stack, const fem::Mesh& mesh) {
+  const auto same_electrode = [](const ElectrodeGeometry& a, const ElectrodeGeometry& b) {
+    return a.material == b.material && a.cap_diameter == b.cap_diameter && a.face_diameter == b.face_diameter &&
+           a.face_radius == b.face_radius && a.cone_angle == b.cone_angle && a.length == b.length &&
+           a.bore_diameter == b.bore_diameter && a.bore_depth == b.bore_depth;
+  };
+  // Two sheets only: the interface laws treat the upper sheet of a sheet/sheet pair as
+  // the slave side, so the two interfaces of three sheets are not each other's mirror
+  // (slave and master swap), and the whole three-sheet stack is not symmetric.
+  if (!same_electrode(stack.upper, stack.lower) || stack.sheets.size() != 2) return {};
+  const std::size_t n = stack.sheets.size();
+  for (std::size_t k = 0; k < n; ++k) {
+    const Sheet& a = stack.sheets[k];
+    const Sheet& b = stack.sheets[n - 1 - k];
+    if (a.material != b.material || a.thickness != b.thickness) return {};
+  }
+  std::vector<int> mirror(mesh.n_bodies());
+  mirror[mesh.body_index("upper_electrode")] = mesh.body_index("lower_electrode");
+  mirror[mesh.body_index("lower_electrode")] = mesh.body_index("upper_electrode");
+  for (std::size_t k = 0; k < n; ++k)
+    mirror[mesh.body_index(stack.sheets[k].name)] = mesh.body_index(stack.sheets[n - 1 - k].name);
+  return mirror;
+}
+
 }  // namespace rsw::meshes

@@ -106,6 +106,7 @@ struct Electrical::Impl {
   Eigen::VectorXd ground_weight;  // 1 on the ground face, hanging nodes interpolated
   std::vector<int> ground_cells;
   int ground_body = -1;
+  int ground_node = -1;  // φ = 0 there, or −V under a mirror: potentials are taken relative to it
   std::vector<std::array<PointLocation, 2>> probes;
 
   // Inputs of the current solve.
@@ -135,12 +136,15 @@ struct Electrical::Impl {
     for (int e = 0; e < mesh.n_cells(); ++e) cell_material.push_back(body_material[mesh.cell_body[e]]);
     for (int n = 0; n < mesh.n_nodes(); ++n) node_material.push_back(body_material[mesh.node_body[n]]);
 
+    fem::add_mirror_constraints(constraints, mesh, dofs, s.mirror, {-1.0});  // before the ground
     constraints.add_hanging_nodes(mesh, dofs);
     constraints.constrain_boundary(mesh, dofs, s.ground_boundary, 0, [](const fem::Point&) { return 0.0; });
     for (int n : mesh.boundary_nodes(s.current_boundary)) constraints.add_line(dofs.dof(n, 0), {{voltage_dof, 1.0}});
     constraints.close();
 
     assembler = std::make_unique<fem::Assembler>(mesh, dofs, constraints, interfaces.dof_groups());
+    assembler->set_mirror(s.mirror);
+    ground_node = mesh.boundary_nodes(s.ground_boundary).front();
 
     ground_weight = Eigen::VectorXd::Zero(mesh.n_nodes());
     for (int n : mesh.boundary_nodes(s.ground_boundary)) ground_weight[n] = 1.0;
@@ -182,17 +186,20 @@ struct Electrical::Impl {
                                  "' has no conducting path to the ground face (no closed contact)");
   }
 
+  // T at Gauss point q of cell e.
+  double gauss_temperature(int e, int q) const {
+    double Tq = 0;
+    for (int a = 0; a < 4; ++a) Tq += shape[q][a] * (*temperature)[mesh.cells[e][a]];
+    return Tq;
+  }
+
   // ∫ σ ∇N_a·∇N_b dV with σ = 1/ρ_e(T) at each Gauss point.
   void cell_kernel(int e, fem::LocalSystem& local) {
-    const auto& c = mesh.cells[e];
-    const Eigen::VectorXd& T = *temperature;
     const materials::Material& mat = *cell_material[e];
     Matrix4 Ke = Matrix4::Zero();
     for (int q = 0; q < n_q; ++q) {
-      double Tq = 0;
-      for (int a = 0; a < 4; ++a) Tq += shape[q][a] * T[c[a]];
       const std::size_t k = static_cast<std::size_t>(e) * n_q + q;
-      sigma[k] = 1.0 / mat.electrical_resistivity(Tq).value;
+      sigma[k] = 1.0 / mat.electrical_resistivity(gauss_temperature(e, q)).value;
       const double w = sigma[k] * JxW[k];
       const Eigen::Vector2d* g = &grad[4 * k];
       for (int a = 0; a < 4; ++a)
@@ -278,9 +285,10 @@ const ElectricalSolution& Electrical::solve(const std::vector<fem::Point>& posit
   const Eigen::VectorXd unit = m.constraints.distribute(reduced);
 
   sol.current = current;
-  sol.resistance = unit[m.voltage_dof];
+  const double ground = unit[m.ground_node];  // 0, or −V under a mirror
+  sol.resistance = unit[m.voltage_dof] - ground;
   sol.voltage = current * sol.resistance;
-  sol.potential = current * unit.head(mesh.n_nodes());
+  sol.potential = current * (unit.head(mesh.n_nodes()).array() - ground).matrix();
   const Eigen::VectorXd& phi = sol.potential;
 
   // Bulk Joule heat σ|∇φ|² at the Gauss points of the assembly.
@@ -289,8 +297,10 @@ const ElectricalSolution& Electrical::solve(const std::vector<fem::Point>& posit
   sol.bulk_power = 0;
   for (int e = 0; e < mesh.n_cells(); ++e) {
     const auto& c = mesh.cells[e];
+    const bool assembled = m.assembler->cell_weight(e) != 0.0;  // set σ at its Gauss points
     for (int q = 0; q < n_q; ++q) {
       const std::size_t k = static_cast<std::size_t>(e) * n_q + q;
+      if (!assembled) m.sigma[k] = 1.0 / m.cell_material[e]->electrical_resistivity(m.gauss_temperature(e, q)).value;
       Eigen::Vector2d g = Eigen::Vector2d::Zero();
       for (int a = 0; a < 4; ++a) g += phi[c[a]] * m.grad[4 * k + a];
       sol.joule_heat[k] = m.sigma[k] * g.squaredNorm();

@@ -43,6 +43,7 @@
 #include "contact/interface_laws.hpp"
 #include "contact/interface_pairing.hpp"
 #include "fem/mesh.hpp"
+#include "fem/mirror.hpp"
 #include "materials/material.hpp"
 #include "physics/mechanics.hpp"
 #include "physics/problem.hpp"
@@ -69,6 +70,10 @@ struct ElectricalSettings {
   int n_gauss = 2;                // per direction in cells and along the interfaces
   double search_margin = 0.5e-3;  // m, of the pairings (must equal the mechanics')
   std::vector<VoltageProbe> probes;
+  // A mirror symmetry about z = 0 (fem/mirror.hpp), or empty: solve for the upper half,
+  // φ odd in z (the ground face is then the current face's image, at −V; potentials and
+  // the resistance are reported relative to it, as without the mirror).
+  fem::MirrorSymmetry mirror;
 };
 
 // A point of the mesh: its cell and reference coordinates (ξ, η) ∈ [-1, 1]².

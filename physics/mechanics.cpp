@@ -4,6 +4,7 @@
 
 #include "contact/mechanical_contact.hpp"
 #include "fem/fe_values.hpp"
+#include "fem/mirror.hpp"
 
 #include <algorithm>
 #include <array>
@@ -162,6 +163,7 @@ struct Mechanics::Impl {
   // under displacement control w is prescribed too.
   void setup_constraints(const MechanicsSettings& s) {
     for (fem::Constraints* c : {&force_constraints, &displacement_constraints}) {
+      fem::add_mirror_constraints(*c, mesh, dofs, s.mirror, {1.0, -1.0});  // before the supports
       c->add_hanging_nodes(mesh, dofs);
       for (const auto& [name, faces] : mesh.boundaries)
         if (name.size() > 5 && name.compare(name.size() - 5, 5, ".axis") == 0)
@@ -258,6 +260,8 @@ struct Mechanics::Impl {
     // Newton iteration (elastic_matrix below): only the changed ones are scattered.
     force_assembler->enable_cell_matrix_cache();
     displacement_assembler->enable_cell_matrix_cache();
+    force_assembler->set_mirror(settings.mirror);
+    displacement_assembler->set_mirror(settings.mirror);
     // The preconditioner's factor is large (6·10⁵ entries on the paper's mesh) and
     // its two triangular solves per GMRES iteration stream it from memory: supernodal,
     // so that it is applied in single precision (fem/linear_solver.hpp).
@@ -699,6 +703,13 @@ struct Mechanics::Impl {
     if (!friction_coupling_only) point_dofs.add(local, force + share * friction_force, stiffness + share * friction_stiffness);
   }
 
+  // Under a mirror, the values of image cells (never evaluated) from their sources.
+  void from_sources(std::vector<double>& cell_values) const {
+    if (settings.mirror.empty()) return;
+    for (int e = 0; e < mesh.n_cells(); ++e)
+      if (settings.mirror.cell_source[e] >= 0) cell_values[e] = cell_values[settings.mirror.cell_source[e]];
+  }
+
   // Reduced residual (and tangent) at the current increment.
   void evaluate(Control ctrl, fem::SparseMatrix& K, Eigen::VectorXd& R, bool matrix) {
     const std::vector<fem::Point> x = trial_positions();
@@ -996,6 +1007,9 @@ struct Mechanics::Impl {
       for (int n = 0; n < mesh.n_nodes(); ++n)
         if (mesh.node_body[n] == body) increment[2 * n + 1] = change;
       increment[w_dof] = change;
+      // Under a mirror the image of the loaded body moves the other way.
+      if (!settings.mirror.empty())
+        increment = displacement_constraints.distribute(displacement_constraints.restrict_to_free(increment));
     }
   }
 
@@ -1016,7 +1030,17 @@ struct Mechanics::Impl {
 Mechanics::Mechanics(const fem::Mesh& mesh, std::vector<const materials::Material*> body_materials,
                      const MechanicsSettings& settings, double initial_temperature)
     : impl_(std::make_unique<Impl>(mesh, std::move(body_materials), settings, initial_temperature)),
-      positions_(mesh.nodes) {}
+      positions_(mesh.nodes) {
+  if (settings.mirror.empty()) return;
+  for (int n : mesh.boundary_nodes(settings.fixed_boundary)) {
+    const auto loaded = mesh.boundary_nodes(settings.loaded_boundary);
+    if (!settings.mirror.is_image(n) ||
+        !std::binary_search(loaded.begin(), loaded.end(), settings.mirror.image_of[n]))
+      throw std::invalid_argument("Mechanics: under a mirror the fixed boundary '" + settings.fixed_boundary +
+                                  "' must be the image of the loaded boundary '" + settings.loaded_boundary + "'");
+  }
+  approach_per_w_ = 2;
+}
 
 Mechanics::~Mechanics() = default;
 
@@ -1072,6 +1096,7 @@ MechanicsStepReport Mechanics::solve_displacement_step(double w, const Eigen::Ve
   Impl& m = *impl_;
   m.set_temperature(nodal_temperature);
   m.control = Control::displacement;
+  w /= approach_per_w_;  // the loaded face's share of the approach
   m.displacement_constraints.set_value(m.w_dof, w - w_);
   m.displacement_constraints.close();
   m.predict(Control::displacement, w - w_);
@@ -1111,10 +1136,15 @@ void Mechanics::commit() {
   w_ += m.increment[m.w_dof];
   m.increment.setZero();
   positions_ = m.current.nodes;
+  if (!m.settings.mirror.empty())
+    for (auto& x : positions_) x.y() += w_;  // the rigid shift that puts the fixed end face back
 }
 
 Eigen::VectorXd Mechanics::displacement() const {
-  return impl_->total.head(2 * impl_->mesh.n_nodes());
+  Eigen::VectorXd u = impl_->total.head(2 * impl_->mesh.n_nodes());
+  if (!impl_->settings.mirror.empty())
+    for (int n = 0; n < impl_->mesh.n_nodes(); ++n) u[2 * n + 1] += w_;
+  return u;
 }
 
 std::vector<InterfaceState> Mechanics::interface_states() const {
@@ -1170,6 +1200,7 @@ std::vector<double> Mechanics::von_mises() const {
     }
     out[e] /= m.n_q;
   }
+  m.from_sources(out);
   return out;
 }
 
@@ -1181,6 +1212,7 @@ std::vector<double> Mechanics::equivalent_plastic_strain() const {
       out[e] += m.state[static_cast<std::size_t>(e) * m.n_q + q].equivalent_plastic_strain;
     out[e] /= m.n_q;
   }
+  m.from_sources(out);
   return out;
 }
 
@@ -1190,9 +1222,21 @@ std::vector<PointStress> Mechanics::point_stresses() const {
   const Impl& m = *impl_;
   std::vector<PointStress> out;
   fem::CellValues fv(m.settings.n_gauss);
+  const fem::MirrorSymmetry& mirror = m.settings.mirror;
+  const double shift = mirror.empty() ? 0.0 : w_;
   for (int e = 0; e < m.mesh.n_cells(); ++e) {
-    fv.reinit(m.current, e);
-    for (int q = 0; q < m.n_q; ++q) out.push_back({fv.point(q), m.trial_stress[static_cast<std::size_t>(e) * m.n_q + q]});
+    // An image cell's points are its source's reflected (u_z and τ_rz change sign).
+    const int source = mirror.empty() ? -1 : mirror.cell_source[e];
+    fv.reinit(m.current, source < 0 ? e : source);
+    for (int q = 0; q < m.n_q; ++q) {
+      PointStress p{fv.point(q), m.trial_stress[static_cast<std::size_t>(source < 0 ? e : source) * m.n_q + q]};
+      if (source >= 0) {
+        p.position.y() = -p.position.y();
+        p.stress[3] = -p.stress[3];
+      }
+      p.position.y() += shift;
+      out.push_back(p);
+    }
   }
   return out;
 }

@@ -115,6 +115,11 @@ struct MechanicsSettings {
   // Normal pressure on named boundaries (Pa, pressing into the body), applied on the
   // configuration at the start of each step.
   std::vector<std::pair<std::string, double>> pressure_loads;
+  // A mirror symmetry about z = 0 (fem/mirror.hpp), or empty: solve for the upper half,
+  // the lower half its image (u_r even, u_z odd in z). The stack, its loads and supports
+  // must then be symmetric: `fixed_boundary` is the image of `loaded_boundary`, so that
+  // the plane z = 0 stays put and the end faces move by ±w (see end_face_displacement).
+  fem::MirrorSymmetry mirror;
 };
 
 // Stress at one quadrature point (current configuration).
@@ -188,10 +193,14 @@ class Mechanics {
   // contact traction of that moment, so the traction is continuous in β and in time.
   void set_bonding_degree(const std::vector<std::vector<double>>& degree);
 
-  // Totals after the last commit.
+  // Totals after the last commit, with the fixed end face at rest (under a mirror the
+  // solution moves both end faces; the rigid shift that puts the fixed one back is
+  // added, so the outputs are the full mesh's).
   const std::vector<fem::Point>& positions() const { return positions_; }
   Eigen::VectorXd displacement() const;  // nodal (u_r, u_z), node-major
-  double end_face_displacement() const { return w_; }
+  // Axial displacement of the loaded end face relative to the fixed one (m, < 0
+  // closing): w, or 2w under a mirror. solve_displacement_step() prescribes it.
+  double end_face_displacement() const { return approach_per_w_ * w_; }
   // Axial force transmitted through the upper end face (N, > 0 pressing), from the
   // last solved step (the reaction in displacement control).
   double electrode_force() const { return force_; }
@@ -223,6 +232,7 @@ class Mechanics {
   std::unique_ptr<Impl> impl_;
   std::vector<fem::Point> positions_;
   double w_ = 0, force_ = 0;
+  double approach_per_w_ = 1;  // 2 under a mirror: the fixed end face moves by −w
 };
 
 }  // namespace rsw::physics

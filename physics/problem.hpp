@@ -87,6 +87,7 @@ struct SolverSettings {
   double mechanics_tolerance{};       // -, Newton's residual tolerance relative to the electrode force
   double mechanics_error_estimate{};  // m, Newton's estimated remaining displacement error that ends a step
   bool stop_on_electrode_melting{};   // fail the run when an electrode reaches its solidus
+  bool mirror_symmetry{};             // solver.mirror_symmetry = auto: solve the upper half of a symmetric stack
 };
 
 struct OutputSettings {

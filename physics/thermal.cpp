@@ -134,6 +134,7 @@ struct Thermal::Impl {
     }
     for (int n = 0; n < mesh.n_nodes(); ++n) node_material.push_back(body_material[mesh.node_body[n]]);
 
+    fem::add_mirror_constraints(constraints, mesh, dofs, s.mirror, {1.0});  // before the fixed values
     constraints.add_hanging_nodes(mesh, dofs);
     for (const auto& [name, value] : s.fixed_temperatures) {
       const double v = value;
@@ -143,6 +144,7 @@ struct Thermal::Impl {
 
     for (const auto& pairing : pairings) conductance.emplace_back(pairing.points().size(), 0.0);
     assembler = std::make_unique<fem::Assembler>(mesh, dofs, constraints, interfaces.dof_groups());
+    assembler->set_mirror(s.mirror);
     history = contact::InterfaceHistory(pairings);
     trial_history = history;
 

@@ -88,6 +88,7 @@
 #include "contact/interface_law.hpp"
 #include "contact/interface_laws.hpp"
 #include "fem/mesh.hpp"
+#include "fem/mirror.hpp"
 #include "materials/material.hpp"
 #include "physics/problem.hpp"
 
@@ -133,6 +134,9 @@ struct ThermalSettings {
   // (from the committed field if false or at the first step).
   bool extrapolate = true;
   bool verbose = false;  // print Newton iterations to stderr
+  // A mirror symmetry about z = 0 (fem/mirror.hpp), or empty: solve for the upper half,
+  // T even in z. Mesh, materials and boundary values must then be symmetric.
+  fem::MirrorSymmetry mirror;
 };
 
 // The settings of a weld case (initial temperature, cooling, air, λ_m).

@@ -162,6 +162,13 @@ void WeldDriver::setup() {
   clock_.start("setup");
   result_.output_dir = folder_.path();
   mesh_ = meshes::weld_mesh(problem_.geometry, problem_.mesh);
+  // A symmetric stack is solved on its upper half (fem/mirror.hpp); nodes are matched
+  // to 1 nm (the finest cells are 60 µm). A one-pass sheet/sheet contact (slave and
+  // master sheet) is not symmetric, so its stack is solved whole.
+  if (problem_.solver.mirror_symmetry && problem_.solver.two_pass_sheet_contact)
+    if (const std::vector<int> bodies = meshes::mirror_bodies(problem_.geometry, mesh_); !bodies.empty())
+      mirror_ = fem::find_mirror_symmetry(mesh_, bodies, 1e-9);
+  result_.mirror_symmetry = !mirror_.empty();
   materials::MaterialLibrary library;
   materials_.reserve(mesh_.n_bodies());
   for (const auto& body : mesh_.body_names) materials_.push_back(library.load(material_of_body(problem_, body)));
@@ -190,6 +197,7 @@ void WeldDriver::setup() {
   if (problem_.solver.two_pass_sheet_contact)
     for (const auto& [name, pair] : mesh_.interfaces)
       if (pair.kind == meshes::interface_kind::sheet_sheet) ms.two_pass_interfaces.push_back(name);
+  ms.mirror = mirror_;
   mech_ = std::make_unique<Mechanics>(mesh_, body_materials_, ms, problem_.thermal.initial_temperature);
 }
 
@@ -252,9 +260,12 @@ std::string WeldDriver::squeeze() {
 void WeldDriver::setup_weld() {
   clock_.start("setup");
   model_ = interface_model(mesh_, problem_.contact);
-  electrical_ = std::make_unique<Electrical>(mesh_, body_materials_, model_);
+  ElectricalSettings es;
+  es.mirror = mirror_;
+  electrical_ = std::make_unique<Electrical>(mesh_, body_materials_, model_, es);
   ThermalSettings th = thermal_settings(problem_.thermal);
   th.verbose = verbose_;
+  th.mirror = mirror_;
   thermal_ = std::make_unique<Thermal>(mesh_, body_materials_, model_, th);
   CouplingSettings cs;
   cs.acceleration_depth = problem_.solver.coupling_acceleration_depth;

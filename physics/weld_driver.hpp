@@ -24,6 +24,7 @@
 #include "contact/interface_law.hpp"
 #include "contact/interface_laws.hpp"
 #include "fem/mesh.hpp"
+#include "fem/mirror.hpp"
 #include "fem/output_folder.hpp"
 #include "materials/material_library.hpp"
 #include "physics/electrical.hpp"
@@ -117,6 +118,7 @@ class WeldDriver {
   Stopwatch clock_;
 
   fem::Mesh mesh_;
+  fem::MirrorSymmetry mirror_;  // of a symmetric stack (solver.mirror_symmetry = auto), else empty
   std::vector<materials::Material> materials_;         // per body
   std::vector<const materials::Material*> body_materials_;
   std::vector<int> sheet_bodies_;                       // top to bottom

@@ -256,6 +256,7 @@ void write_summary_json(const fs::path& file, const Problem& problem, const RunR
   j["case"] = problem.name;
   j["wall_time_s"] = result.wall_time;
   j["weld_steps"] = result.n_steps;
+  j["mirror_symmetry"] = result.mirror_symmetry;
   j["newton_iterations"] = result.n_newton_iterations;
   j["coupling_iterations"] = result.n_coupling_iterations;
   j["mechanics_substep_splits"] = result.n_mechanics_substepped;

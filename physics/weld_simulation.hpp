@@ -73,6 +73,7 @@ struct RunResult {
   // Wall time per part of the run (s): setup, squeeze, electrical, thermal, mechanics, output.
   std::vector<std::pair<std::string, double>> timing;
   int n_steps = 0;
+  bool mirror_symmetry = false;     // the upper half was solved, the lower half its image (solver.mirror_symmetry)
   int n_newton_iterations = 0;
   int n_coupling_iterations = 0;    // electro-thermal iterations, summed over steps
   int n_mechanics_substepped = 0;   // mechanics sub-steps made by halving (mechanics_stepper.hpp)

@@ -1,6 +1,8 @@
 // Weld-case meshes: element sizes of the default case, validity of every cell,
-// boundary nodes on the true contour, volumes of the electrode against closed forms.
+// boundary nodes on the true contour, volumes of the electrode against closed forms,
+// the mirror symmetry of symmetric stacks.
 #include "fem/fe_values.hpp"
+#include "fem/mirror.hpp"
 #include "meshes/weld_mesh.hpp"
 
 #include <gtest/gtest.h>
@@ -214,4 +216,38 @@ TEST(WeldMesh, ImpossibleElectrodeIsRejectedWithItsDimension) {
     EXPECT_NE(std::string(e.what()).find("upper_electrode"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("bore"), std::string::npos) << e.what();
   }
+}
+
+// A stack of two equal sheets between equal electrodes meshes symmetrically about its
+// mid-plane: every node below has its image above (fem/mirror.hpp). Unequal sheets,
+// electrodes or refinement do not, nor three sheets.
+TEST(WeldMesh, SymmetricStacksMeshAsTheirMirrorImageAndOthersDoNot) {
+  const meshes::MeshSettings settings;
+  const fem::Mesh two = meshes::weld_mesh(default_stack(), settings);
+  const auto bodies = meshes::mirror_bodies(default_stack(), two);
+  ASSERT_EQ(bodies, (std::vector<int>{3, 2, 1, 0}));
+  const fem::MirrorSymmetry m = fem::find_mirror_symmetry(two, bodies, 1e-9);
+  ASSERT_FALSE(m.empty());
+  int lower = 0;
+  for (int n = 0; n < two.n_nodes(); ++n) lower += two.node_body[n] >= 2;
+  EXPECT_EQ(m.n_images(), lower);
+
+  // Three sheets, however symmetric, are solved whole (meshes/weld_mesh.hpp).
+  meshes::StackGeometry three;
+  three.sheets = {{"sheet_1", "DP1200", 1e-3}, {"sheet_2", "DX54", 1.5e-3}, {"sheet_3", "DP1200", 1e-3}};
+  EXPECT_TRUE(meshes::mirror_bodies(three, meshes::weld_mesh(three, settings)).empty());
+  meshes::StackGeometry unequal = default_stack();
+  unequal.sheets[1].thickness = 1.5e-3;
+  EXPECT_TRUE(meshes::mirror_bodies(unequal, meshes::weld_mesh(unequal, settings)).empty());
+  meshes::StackGeometry other_material = default_stack();
+  other_material.sheets[1].material = "DX54";
+  EXPECT_TRUE(meshes::mirror_bodies(other_material, two).empty());
+  meshes::StackGeometry other_electrode = default_stack();
+  other_electrode.lower.face_radius = 40e-3;
+  EXPECT_TRUE(meshes::mirror_bodies(other_electrode, two).empty());
+  // Equal bodies, but a refinement box above the plane only: the mesh is not symmetric.
+  meshes::MeshSettings one_sided = settings;
+  one_sided.extra_boxes.push_back({0.0, 2e-3, 0.2e-3, 0.6e-3, 3});
+  const fem::Mesh boxed = meshes::weld_mesh(default_stack(), one_sided);
+  EXPECT_TRUE(fem::find_mirror_symmetry(boxed, meshes::mirror_bodies(default_stack(), boxed), 1e-9).empty());
 }
