@@ -265,6 +265,8 @@ void Assembler::scatter_cached(int cell, const LocalSystem& local, Eigen::Vector
 void Assembler::set_mirror(const MirrorSymmetry& mirror) {
   weight_.clear();
   partitioned_threads_ = 0;  // the threads' blocks follow the evaluated cells
+  cache_assemblies_ = 0;     // the cached sum holds the cells of the old weights
+  cache_complete_ = false;
   if (mirror.empty()) return;
   if (static_cast<int>(mirror.image_of.size()) != mesh_.n_nodes())
     throw std::invalid_argument("Assembler::set_mirror: the mirror is of another mesh");
@@ -395,13 +397,15 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
   if (terms.groups) {
     const int n_cells = mesh_.n_cells();
     for (int g = 0; g < n_groups(); ++g) {
+      // A group of weight 0 is evaluated, not assembled: a contact kernel keeps its
+      // points' friction history, which the image interface reports.
       const double w = weight_.empty() ? 1.0 : weight_[n_cells + g];
-      if (w == 0.0) continue;
       const int n = static_cast<int>(element_dofs_[n_cells + g].size());
       local.matrix.setZero(n, n);
       local.vector.setZero(n);
       local.matrix_kept = false;
       terms.groups(g, local);
+      if (w == 0.0) continue;
       if (w != 1.0) {
         local.matrix *= w;
         local.vector *= w;

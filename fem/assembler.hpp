@@ -93,9 +93,10 @@ class Assembler {
   long cell_matrices_reused() const { return cache_reused_; }
 
   // Assembles the upper half of a mirror-symmetric problem only (fem/mirror.hpp): each
-  // cell with its boundary faces, and each coupling group, weighted by its nodes (1,
-  // 1/2, or 0: not evaluated). The constraints must hold the images
-  // (add_mirror_constraints). An empty mirror assembles every term again.
+  // cell and each coupling group weighted by its nodes (1, 1/2, or 0), a boundary face
+  // by its cell. Cells and faces of weight 0 are not evaluated; groups of weight 0 are
+  // evaluated (a contact kernel keeps history) but not assembled. The constraints must
+  // hold the images (add_mirror_constraints). An empty mirror assembles every term again.
   void set_mirror(const MirrorSymmetry& mirror);
   // Weight of cell e in the assembly: 1 without a mirror.
   double cell_weight(int e) const { return weight_.empty() ? 1.0 : weight_[e]; }

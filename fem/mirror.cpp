@@ -24,6 +24,7 @@ double MirrorSymmetry::weight(const std::vector<int>& nodes) const {
     if (image_of[n] < 0) source = true;
     else if (image_of[n] != n) image = true;
   }
+  if (!source && !image) return 0.5;  // on the plane only: its own mirror
   return !image ? 1.0 : !source ? 0.0 : 0.5;
 }
 
@@ -115,6 +116,13 @@ MirrorSymmetry find_mirror_symmetry(const Mesh& mesh, const std::vector<int>& bo
     if (s.weight({mesh.cells[c].begin(), mesh.cells[c].end()}) == 0.0) s.cell_source[c] = it->second;
   }
   return s;
+}
+
+bool are_images(const MirrorSymmetry& mirror, const std::vector<int>& images, const std::vector<int>& sources) {
+  if (mirror.empty() || images.size() != sources.size()) return false;
+  for (int n : images)
+    if (!mirror.is_image(n) || !std::binary_search(sources.begin(), sources.end(), mirror.image_of[n])) return false;
+  return true;  // an injective map between sets of one size
 }
 
 void add_mirror_constraints(Constraints& constraints, const Mesh& mesh, const DofMap& dofs,

@@ -20,10 +20,10 @@
 // face, a coupling group such as a contact face) has a mirror term, and P^T adds a
 // term and its mirror onto the same source rows with equal values at a symmetric
 // state. So each pair is assembled once (fem::Assembler::set_mirror): a term on source
-// nodes (and plane nodes) only with weight 1, on image nodes only with weight 0 (not
-// evaluated at all), and a term that couples both (an interface across the plane, a
-// cell the plane cuts) with weight 1/2, since its mirror is another such term or
-// itself. The reduced residual is then the full residual's rows of the source nodes
+// nodes (and plane nodes) only with weight 1, on image nodes (and plane nodes) only
+// with weight 0 (not assembled), and a term that couples both (an interface across the
+// plane, a cell the plane cuts) or lies in the plane with weight 1/2, since its mirror
+// is another such term or itself. The reduced residual is then the full residual's rows of the source nodes
 // (half of them for plane nodes), its zero the full problem's symmetric solution, its
 // Jacobian consistent: Newton's method converges as on the full mesh. What a term
 // keeps as state (plasticity at the Gauss points of an image cell) is not updated:
@@ -52,6 +52,7 @@ struct MirrorSymmetry {
   bool on_plane(int node) const { return !empty() && image_of[node] == node; }
   int n_images() const;
   // Weight of a term over these nodes (see above): 1, 1/2 or 0; 1 without a symmetry.
+  // A face's weight is its cell's (fem::Assembler).
   double weight(const std::vector<int>& nodes) const;
 };
 
@@ -59,6 +60,11 @@ struct MirrorSymmetry {
 // (an involution: body_mirror[body_mirror[b]] == b), positions compared to within
 // `tolerance` (m). Empty where any node, hanging node or cell has no mirror image.
 MirrorSymmetry find_mirror_symmetry(const Mesh& mesh, const std::vector<int>& body_mirror, double tolerance);
+
+// True where the nodes `images` are exactly the images of the nodes `sources` (both
+// sorted, as Mesh::boundary_nodes gives them): a boundary condition on the lower half
+// that the mirror replaces must be the image of one on the upper half.
+bool are_images(const MirrorSymmetry& mirror, const std::vector<int>& images, const std::vector<int>& sources);
 
 // x_image = sign[k] x_source for every component k of every image node that is not a
 // hanging node (hanging nodes follow their parents), and x = 0 for a component with

@@ -241,8 +241,10 @@ std::vector<int> mirror_bodies(const StackGeometry& stack, const fem::Mesh& mesh
   std::vector<int> mirror(mesh.n_bodies());
   mirror[mesh.body_index("upper_electrode")] = mesh.body_index("lower_electrode");
   mirror[mesh.body_index("lower_electrode")] = mesh.body_index("upper_electrode");
-  for (std::size_t k = 0; k < n; ++k)
-    mirror[mesh.body_index(stack.sheets[k].name)] = mesh.body_index(stack.sheets[n - 1 - k].name);
+  const auto name = [&](std::size_t k) {  // as weld_mesh names an unnamed sheet
+    return stack.sheets[k].name.empty() ? "sheet_" + std::to_string(k + 1) : stack.sheets[k].name;
+  };
+  for (std::size_t k = 0; k < n; ++k) mirror[mesh.body_index(name(k))] = mesh.body_index(name(n - 1 - k));
   return mirror;
 }
 

@@ -136,6 +136,10 @@ struct Electrical::Impl {
     for (int e = 0; e < mesh.n_cells(); ++e) cell_material.push_back(body_material[mesh.cell_body[e]]);
     for (int n = 0; n < mesh.n_nodes(); ++n) node_material.push_back(body_material[mesh.node_body[n]]);
 
+    if (!s.mirror.empty() && !fem::are_images(s.mirror, mesh.boundary_nodes(s.ground_boundary),
+                                                mesh.boundary_nodes(s.current_boundary)))
+      throw std::invalid_argument("Electrical: under a mirror the ground face '" + s.ground_boundary +
+                                  "' must be the image of the current face '" + s.current_boundary + "'");
     fem::add_mirror_constraints(constraints, mesh, dofs, s.mirror, {-1.0});  // before the ground
     constraints.add_hanging_nodes(mesh, dofs);
     constraints.constrain_boundary(mesh, dofs, s.ground_boundary, 0, [](const fem::Point&) { return 0.0; });

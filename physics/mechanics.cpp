@@ -1032,13 +1032,10 @@ Mechanics::Mechanics(const fem::Mesh& mesh, std::vector<const materials::Materia
     : impl_(std::make_unique<Impl>(mesh, std::move(body_materials), settings, initial_temperature)),
       positions_(mesh.nodes) {
   if (settings.mirror.empty()) return;
-  for (int n : mesh.boundary_nodes(settings.fixed_boundary)) {
-    const auto loaded = mesh.boundary_nodes(settings.loaded_boundary);
-    if (!settings.mirror.is_image(n) ||
-        !std::binary_search(loaded.begin(), loaded.end(), settings.mirror.image_of[n]))
-      throw std::invalid_argument("Mechanics: under a mirror the fixed boundary '" + settings.fixed_boundary +
-                                  "' must be the image of the loaded boundary '" + settings.loaded_boundary + "'");
-  }
+  if (!fem::are_images(settings.mirror, mesh.boundary_nodes(settings.fixed_boundary),
+                       mesh.boundary_nodes(settings.loaded_boundary)))
+    throw std::invalid_argument("Mechanics: under a mirror the fixed boundary '" + settings.fixed_boundary +
+                                "' must be the image of the loaded boundary '" + settings.loaded_boundary + "'");
   approach_per_w_ = 2;
 }
 

@@ -216,6 +216,8 @@ class Mechanics {
   double normal_penalty(const std::string& interface) const;
   // The contact pairings (one per mesh interface, in mesh.interfaces order), at the
   // last solved configuration, and the normal pressure at each of their points (Pa).
+  // Under a mirror their points stay in the solve's frame, without the rigid shift of
+  // positions(): gaps, weights and areas are the same.
   // The electrical and thermal interface laws use the same points.
   const std::vector<contact::InterfacePairing>& pairings() const;
   std::vector<double> contact_pressure(int pairing) const;

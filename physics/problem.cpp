@@ -361,9 +361,10 @@ void declare_solver(ConfigSchema& s) {
            "staying continuous in the parameters; stop fails the run there.");
   s.choice("solver.mirror_symmetry", {"auto", "off"}).default_value("auto")
       .doc("auto: where the stack is symmetric about its mid-plane (two sheets alike, the two "
-           "electrodes alike, solver.sheet_contact = two_pass), solve for the upper half and take the lower half as its mirror image: the same "
-           "results to the solvers' tolerances (1e-5 measured) in half the time (docs/MODEL.md, 'Mirror "
-           "symmetry'). off: always the whole stack. summary.json records which ran.");
+           "electrodes alike, solver.sheet_contact = two_pass), solve for the upper half and take the "
+           "lower half as its mirror image: the same results to the solvers' tolerances (3e-6 on the default case; up to 0.5 % in a few runs of the "
+           "Table I prior, where the whole stack's own coupling error is as large) in half the time "
+           "(docs/MODEL.md, 'Mirror symmetry'). off: always the whole stack. summary.json records which ran.");
   s.integer("solver.max_cells").default_value("100000")
       .range(Range::closed(1, 1e9))
       .doc("Refuse a mesh of more cells (estimated; a run needs 35 MB + 21 kB per cell). The paper's has 7700.");

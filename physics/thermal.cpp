@@ -134,6 +134,17 @@ struct Thermal::Impl {
     }
     for (int n = 0; n < mesh.n_nodes(); ++n) node_material.push_back(body_material[mesh.node_body[n]]);
 
+    if (!s.mirror.empty()) {
+      // A fixed temperature on the lower half must mirror one on the upper half.
+      std::vector<double> fixed(mesh.n_nodes(), std::nan(""));
+      for (const auto& [name, value] : s.fixed_temperatures)
+        for (int n : mesh.boundary_nodes(name)) fixed[n] = value;
+      for (int n = 0; n < mesh.n_nodes(); ++n)
+        if (s.mirror.is_image(n) && !(fixed[n] == fixed[s.mirror.image_of[n]]) &&
+            !(std::isnan(fixed[n]) && std::isnan(fixed[s.mirror.image_of[n]])))
+          throw std::invalid_argument("Thermal: under a mirror the fixed temperatures must be symmetric (node " +
+                                      std::to_string(n) + " and its image differ)");
+    }
     fem::add_mirror_constraints(constraints, mesh, dofs, s.mirror, {1.0});  // before the fixed values
     constraints.add_hanging_nodes(mesh, dofs);
     for (const auto& [name, value] : s.fixed_temperatures) {

@@ -154,6 +154,10 @@ TEST(Mirror, FindsEveryImageOfASymmetricStackAndNoneOfAnUnequalOne) {
   }
   // A contact face couples both halves: half its weight.
   EXPECT_EQ(m.weight(contact_groups(mesh).front()), 0.5);
+  // The lower slab's bottom is the image of the upper one's top, not of its sides.
+  EXPECT_TRUE(fem::are_images(m, mesh.boundary_nodes("lower.bottom"), mesh.boundary_nodes("upper.top")));
+  EXPECT_FALSE(fem::are_images(m, mesh.boundary_nodes("lower.bottom"), mesh.boundary_nodes("upper.right")));
+  EXPECT_FALSE(fem::are_images(m, mesh.boundary_nodes("upper.top"), mesh.boundary_nodes("upper.top")));
 
   EXPECT_TRUE(upper_lower_mirror(two_slabs(1e-3, 1.2e-3, 4)).empty()) << "unequal thickness";
   fem::Mesh one_sided = slab("upper", 0.0, 1e-3, 4, 4, [](const fem::IndexBox& b) { return b.y0 < 1 ? 1 : 0; });
@@ -210,9 +214,11 @@ TEST(Mirror, ABodyCutByThePlaneIsZeroThereWhereOddAndFreeWhereEven) {
   });
   const fem::MirrorSymmetry m = fem::find_mirror_symmetry(refined, {0}, 1e-12);
   ASSERT_FALSE(m.empty());
-  int on_plane = 0;
-  for (int n = 0; n < refined.n_nodes(); ++n) on_plane += m.on_plane(n);
-  EXPECT_GT(on_plane, 5);
+  std::vector<int> plane;
+  for (int n = 0; n < refined.n_nodes(); ++n)
+    if (m.on_plane(n)) plane.push_back(n);
+  EXPECT_GT(plane.size(), 5u);
+  EXPECT_EQ(m.weight(plane), 0.5);  // a term in the plane is its own mirror
   const Field odd = solve(refined, k, 0, 0, {{"middle.top", V}, {"middle.bottom", -V}}, m, -1);
   for (int n = 0; n < refined.n_nodes(); ++n)
     EXPECT_NEAR(odd.x[n], V * refined.nodes[n].y() / H, 1e-12 * V) << "node " << n;
