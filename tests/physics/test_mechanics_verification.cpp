@@ -2,6 +2,7 @@
 // Hertz contact of the R30 dome on a flat; and the plastic squeeze of the default
 // weld case (force balance on every interface, contact radius beyond Hertz).
 #include "mechanics_fixtures.hpp"
+#include "fem/mirror.hpp"
 #include "meshes/weld_mesh.hpp"
 #include "physics/mechanics.hpp"
 #include "physics/problem.hpp"
@@ -257,6 +258,54 @@ TEST(MechanicsVerification, PlasticSqueezeOfDefaultCaseBalancesForceOnEveryInter
   }
   std::printf("  indentation of sheet_1 (axis vs r = 6 mm): %.2f um\n", (u_out - u_axis) * 1e6);
   EXPECT_GT(u_out - u_axis, 0.0);
+}
+
+// The squeeze of the default case on a coarse mesh solved on its upper half
+// (fem/mirror.hpp) is the whole stack's: the electrode travel, and on every interface,
+// the lower electrode's included, the pressure and the friction shear at each point
+// (Newton ends within 10⁻⁶ of the force: 10⁻⁴ of the peak pressure covers both solves).
+// The lower electrode's friction history is kept by its contact kernel, evaluated but
+// not assembled.
+TEST(MechanicsVerification, SqueezeOnTheUpperHalfGivesTheWholeStacksContactsBelowThePlaneToo) {
+  physics::Problem problem = physics::load_problem(std::string(RSW_SOURCE_DIR) + "/validation/paper_case/weld.yaml");
+  problem.mesh.base_size = 0.5e-3;
+  problem.mesh.weld_zone_levels = 1;
+  const fem::Mesh mesh = meshes::weld_mesh(problem.geometry, problem.mesh);
+  materials::MaterialLibrary library;
+  const auto copper = library.load("CuCrZr");
+  const auto steel = library.load("DP1200");
+  const Eigen::VectorXd T = Eigen::VectorXd::Constant(mesh.n_nodes(), 20.0);
+  const double F = problem.schedule.force.at(0.0);
+  auto squeezed = [&](const fem::MirrorSymmetry& mirror) {
+    physics::MechanicsSettings s;
+    s.friction_coefficient = problem.contact.friction_coefficient;
+    s.two_pass_interfaces = {"ss_1_2"};
+    s.mirror = mirror;
+    auto mech = std::make_unique<physics::Mechanics>(mesh, std::vector<const materials::Material*>{&copper, &steel, &steel, &copper}, s, 20.0);
+    const auto result = physics::squeeze(*mech, F, T);
+    EXPECT_TRUE(result.converged) << result.message;
+    return mech;
+  };
+  const fem::MirrorSymmetry mirror =
+      fem::find_mirror_symmetry(mesh, meshes::mirror_bodies(problem.geometry, mesh), 1e-9);
+  ASSERT_FALSE(mirror.empty());
+  const auto whole = squeezed({});
+  const auto half = squeezed(mirror);
+  EXPECT_NEAR(half->end_face_displacement(), whole->end_face_displacement(), 1e-5 * std::abs(whole->end_face_displacement()));
+  const auto a = whole->interface_states(), b = half->interface_states();
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    double p_max = 0, shear_max = 0;
+    for (double p : a[i].pressure) p_max = std::max(p_max, p);
+    for (double t : a[i].shear) shear_max = std::max(shear_max, std::abs(t));
+    ASSERT_EQ(a[i].pressure.size(), b[i].pressure.size()) << a[i].name;
+    if (a[i].name != "ss_1_2")  // between equal sheets friction has next to nothing to carry
+      EXPECT_GT(shear_max, 1e-2 * p_max) << a[i].name << ": friction carries shear";
+    for (std::size_t k = 0; k < a[i].pressure.size(); ++k) {
+      EXPECT_NEAR(b[i].pressure[k], a[i].pressure[k], 1e-4 * p_max) << a[i].name << " point " << k;
+      EXPECT_NEAR(b[i].shear[k], a[i].shear[k], 1e-4 * p_max) << a[i].name << " point " << k;
+    }
+  }
 }
 
 // Newton stops on its error estimate (|Δu_k|²/|Δu_k−1| below 10⁻¹⁰ m once two full
