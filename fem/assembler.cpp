@@ -125,7 +125,7 @@ void Assembler::partition(int n_threads) const {
   int n_evaluated = 0;
   for (int e = 0; e < n_cells; ++e) {
     rank[e] = n_evaluated;
-    if (weight_.empty() || weight_[e] != 0.0) ++n_evaluated;
+    if (element_weight(e) != 0.0) ++n_evaluated;
     else serial[e] = 1;  // in no block: never evaluated
   }
   auto block_of = [&](int e) { return static_cast<int>(static_cast<long>(rank[e]) * n_threads / n_evaluated); };
@@ -301,9 +301,9 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
   auto scatter_cell = [&](int e, LocalSystem& local) {
     // A cell the mirror plane cuts counts half (fem/mirror.hpp); a kept matrix is the
     // cache's copy, already weighted.
-    if (!weight_.empty() && weight_[e] != 1.0) {
-      if (!local.matrix_kept) local.matrix *= weight_[e];
-      local.vector *= weight_[e];
+    if (const double w = element_weight(e); w != 1.0) {
+      if (!local.matrix_kept) local.matrix *= w;
+      local.vector *= w;
     }
     if (cached)
       scatter_cached(e, local, F, homogeneous, rebuild);
@@ -323,7 +323,7 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
     // misses: docs/PERFORMANCE.md).
     LocalSystem local;
     for (int e = 0; e < mesh_.n_cells(); ++e) {
-      if (!weight_.empty() && weight_[e] == 0.0) continue;
+      if (element_weight(e) == 0.0) continue;
       local.matrix.setZero(n_local, n_local);
       local.vector.setZero(n_local);
       local.matrix_kept = false;
@@ -346,7 +346,7 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
         for (int b = omp_get_thread_num(); b < n_threads; b += omp_get_num_threads())
           for (const int e : blocks_[b]) {
             if (failed.load(std::memory_order_relaxed)) break;
-            if (!weight_.empty() && weight_[e] == 0.0) continue;
+            if (element_weight(e) == 0.0) continue;
             try {
               local.matrix.setZero(n_local, n_local);
               local.vector.setZero(n_local);
@@ -368,7 +368,7 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
   if (cell_kernel && omp_get_max_threads() > 1)
     for (const std::vector<int>* cells : std::array<const std::vector<int>*, 2>{&border_cells_, &serial_cells_})
       for (int e : *cells) {
-        if (!weight_.empty() && weight_[e] == 0.0) continue;
+        if (element_weight(e) == 0.0) continue;
         local.matrix.setZero(n_local, n_local);
         local.vector.setZero(n_local);
         local.matrix_kept = false;
@@ -382,7 +382,7 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
   }
   for (const auto& term : terms.faces)
     for (const auto& face : *term.faces) {
-      const double w = weight_.empty() ? 1.0 : weight_[face.cell];
+      const double w = element_weight(face.cell);
       if (w == 0.0) continue;
       local.matrix.setZero(n_local, n_local);
       local.vector.setZero(n_local);
@@ -399,7 +399,7 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
     for (int g = 0; g < n_groups(); ++g) {
       // A group of weight 0 is evaluated, not assembled: a contact kernel keeps its
       // points' friction history, which the image interface reports.
-      const double w = weight_.empty() ? 1.0 : weight_[n_cells + g];
+      const double w = element_weight(n_cells + g);
       const int n = static_cast<int>(element_dofs_[n_cells + g].size());
       local.matrix.setZero(n, n);
       local.vector.setZero(n);

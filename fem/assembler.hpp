@@ -99,7 +99,7 @@ class Assembler {
   // hold the images (add_mirror_constraints). An empty mirror assembles every term again.
   void set_mirror(const MirrorSymmetry& mirror);
   // Weight of cell e in the assembly: 1 without a mirror.
-  double cell_weight(int e) const { return weight_.empty() ? 1.0 : weight_[e]; }
+  double cell_weight(int e) const { return element_weight(e); }
 
   // Assembles K_red and F_red. `cell_kernel` may be empty (face terms only) and the
   // matrix may be skipped (assemble_matrix = false, e.g. for a residual check).
@@ -172,6 +172,7 @@ class Assembler {
   mutable std::atomic<long> cache_scattered_{0}, cache_reused_{0};
   // Per element (cells, then groups), with a mirror: 1, 1/2 or 0 (set_mirror); else empty.
   std::vector<double> weight_;
+  double element_weight(int element) const { return weight_.empty() ? 1.0 : weight_[element]; }
 };
 
 }  // namespace rsw::fem
