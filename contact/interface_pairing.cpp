@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace rsw::contact {
@@ -81,6 +82,18 @@ int InterfacePairing::local_index(int slave_face, int node) const {
   return it == nodes.end() ? -1 : static_cast<int>(it - nodes.begin());
 }
 
+InterfacePairing::Projection InterfacePairing::projection(const std::vector<fem::Point>& x, int face,
+                                                          const fem::Point& point) const {
+  const fem::Point& m1 = x[master_faces_[face][0]];
+  const fem::Point& m2 = x[master_faces_[face][1]];
+  const fem::Point t = m2 - m1;
+  Projection pr;
+  pr.eta_raw = (point - m1).dot(t) / t.squaredNorm();
+  pr.eta = std::clamp(pr.eta_raw, 0.0, 1.0);
+  pr.distance2 = (point - (m1 + pr.eta * t)).squaredNorm();
+  return pr;
+}
+
 bool InterfacePairing::update(const std::vector<fem::Point>& x) {
   const auto rule = fem::gauss_legendre(n_gauss_);
   bool within = true;
@@ -90,6 +103,20 @@ bool InterfacePairing::update(const std::vector<fem::Point>& x) {
       nodal_normals[k] += outward_normal(x[master_faces_[f][0]], x[master_faces_[f][1]]);
     nodal_normals[k].normalize();
   }
+  std::vector<Box> boxes(master_faces_.size());
+  for (std::size_t m = 0; m < master_faces_.size(); ++m) {
+    const fem::Point& m1 = x[master_faces_[m][0]];
+    const fem::Point& m2 = x[master_faces_[m][1]];
+    boxes[m] = {std::min(m1.x(), m2.x()), std::max(m1.x(), m2.x()), std::min(m1.y(), m2.y()), std::max(m1.y(), m2.y())};
+  }
+  last_closest_.resize(points_.size(), -1);
+  std::vector<int> by_r(master_faces_.size()), nearby;
+  double widest = 0;
+  for (std::size_t m = 0; m < boxes.size(); ++m) {
+    by_r[m] = static_cast<int>(m);
+    widest = std::max(widest, boxes[m].r1 - boxes[m].r0);
+  }
+  std::sort(by_r.begin(), by_r.end(), [&](int a, int b) { return boxes[a].r0 < boxes[b].r0; });
   for (auto& p : points_) {
     const fem::Point& a = x[p.slave_nodes[0]];
     const fem::Point& b = x[p.slave_nodes[1]];
@@ -97,25 +124,41 @@ bool InterfacePairing::update(const std::vector<fem::Point>& x) {
     const int q = static_cast<int>(&p - points_.data()) % n_gauss_;
     p.area = rule.weights[q] * 0.5 * (b - a).norm() * 2.0 * M_PI * p.position.x();
 
-    // Closest point over all master faces (few hundred at most; a brute-force search
-    // also tells whether the winner is a candidate).
+    // Closest point over all master faces, the first in face order where several are
+    // equally close (a point facing a master node); the winner need not be a
+    // candidate. A face whose bounding box lies farther than the last update's closest
+    // face is now (`bound`) cannot win and is not projected on: the result is that of
+    // projecting on every face.
+    const std::size_t point = static_cast<std::size_t>(&p - points_.data());
+    double bound = std::numeric_limits<double>::infinity();
+    if (last_closest_[point] >= 0) bound = projection(x, last_closest_[point], p.position).distance2;
+    bound = bound * (1 + 1e-6) + 1e-24;  // margin for rounding: 1 pm, or 10⁻⁶ of the distance²
+    // Faces that may lie within the bound: by r (faces sorted by their smaller r,
+    // none longer in r than `widest`), then by their boxes, in face order.
+    nearby.clear();
+    const double reach = std::sqrt(bound) * (1 + 1e-12);
+    auto first = std::lower_bound(by_r.begin(), by_r.end(), p.position.x() - reach - widest,
+                                  [&](int m, double r) { return boxes[m].r0 < r; });
+    for (auto it = first; it != by_r.end() && boxes[*it].r0 <= p.position.x() + reach; ++it) {
+      const Box& box = boxes[*it];
+      const double dr = std::max({0.0, box.r0 - p.position.x(), p.position.x() - box.r1});
+      const double dz = std::max({0.0, box.z0 - p.position.y(), p.position.y() - box.z1});
+      if (dr * dr + dz * dz <= bound) nearby.push_back(*it);
+    }
+    std::sort(nearby.begin(), nearby.end());
     double best = 1e300;
     int best_face = -1;
     double best_eta = 0, best_eta_raw = 0;
-    for (std::size_t m = 0; m < master_faces_.size(); ++m) {
-      const fem::Point& m1 = x[master_faces_[m][0]];
-      const fem::Point& m2 = x[master_faces_[m][1]];
-      const fem::Point t = m2 - m1;
-      const double eta_raw = (p.position - m1).dot(t) / t.squaredNorm();
-      const double eta = std::clamp(eta_raw, 0.0, 1.0);
-      const double d = (p.position - (m1 + eta * t)).squaredNorm();
-      if (d < best - 1e-30) {
-        best = d;
+    for (const int m : nearby) {
+      const Projection pr = projection(x, m, p.position);
+      if (pr.distance2 < best - 1e-30) {
+        best = pr.distance2;
         best_face = static_cast<int>(m);
-        best_eta = eta;
-        best_eta_raw = eta_raw;
+        best_eta = pr.eta;
+        best_eta_raw = pr.eta_raw;
       }
     }
+    last_closest_[point] = best_face;
     p.paired = false;
     p.master_face = -1;
     if (best_face < 0) continue;

@@ -80,6 +80,16 @@ class InterfacePairing {
   int local_index(int slave_face, int node) const;
 
  private:
+  // The closest point of master face `face` to `point`: the parameter along the face
+  // (raw, and clamped to the face) and the squared distance.
+  struct Projection {
+    double eta_raw = 0, eta = 0, distance2 = 0;
+  };
+  struct Box {
+    double r0, r1, z0, z1;
+  };
+  Projection projection(const std::vector<fem::Point>& x, int face, const fem::Point& point) const;
+
   const fem::Mesh& mesh_;
   std::string name_, slave_, master_;
   int n_gauss_;
@@ -89,6 +99,7 @@ class InterfacePairing {
   std::vector<std::vector<int>> master_faces_of_node_;          // indexed by position in master_nodes_
   std::vector<int> master_nodes_;                               // sorted mesh nodes of the master side
   std::vector<ContactPoint> points_;
+  std::vector<int> last_closest_;  // per point, the closest master face of the last update (-1: none)
 };
 
 }  // namespace rsw::contact

@@ -17,6 +17,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -658,4 +659,58 @@ TEST(MechanicalContactLaws, RegularisedCoulombSticksSaturatesAndHasExactDerivati
     EXPECT_NEAR(law.d_trial, d_trial, 1e-7) << u;
     EXPECT_NEAR(law.d_pressure, d_p, 1e-7 * mu) << u;
   }
+}
+
+// The pairing's closest-face search skips faces that cannot beat the last update's
+// closest face; it must still pick, at every point, the face an exhaustive search picks
+// (the first in face order among equally close ones: a point facing a master node).
+// The default weld mesh's interfaces are moved through a sequence of displacement
+// fields (a shear of up to 0.4 mm along r, a bulge, noise of ±20 µm), so that the
+// last closest face is often no longer the closest, and back to rest, where slave and
+// master nodes coincide (ties between the two faces at a node).
+TEST(InterfacePairing, PrunedSearchPicksTheFaceAnExhaustiveSearchPicks) {
+  const physics::Problem problem = physics::make_problem(fem::Config(physics::weld_case_schema()));
+  const fem::Mesh mesh = meshes::weld_mesh(problem.geometry, problem.mesh);
+  std::vector<double> noise(mesh.n_nodes());
+  unsigned state = 12345;
+  for (double& v : noise) {
+    state = state * 1103515245u + 12345u;
+    v = ((state >> 8) % 2001) / 1000.0 - 1.0;  // in [−1, 1]
+  }
+  int checked = 0;
+  for (const auto& [name, sides] : mesh.interfaces)
+    for (const bool mirrored : {false, true}) {
+      contact::InterfacePairing pairing(mesh, name, 2, 0.5e-3, mirrored);
+      std::vector<std::array<int, 2>> master;
+      for (const auto& f : mesh.boundary(mirrored ? sides.first : sides.second)) master.push_back(mesh.face_nodes(f));
+      for (const double a : {0.0, 0.1e-3, 0.4e-3, -0.3e-3, 0.05e-3, 0.0}) {
+        std::vector<fem::Point> x = mesh.nodes;
+        const bool rest = a == 0.0;
+        for (int n = 0; n < mesh.n_nodes(); ++n) {
+          if (rest) break;
+          const bool slave_side = mesh.node_body[n] == mesh.node_body[pairing.points().front().slave_nodes[0]];
+          const double r = mesh.nodes[n].x();
+          x[n].x() += (slave_side ? a : 0.0) + 20e-6 * noise[n];
+          x[n].y() += (slave_side ? 1 : -1) * 5e-6 * std::exp(-r * r / 4e-6) + 20e-6 * noise[(n * 7) % mesh.n_nodes()];
+        }
+        pairing.update(x);
+        for (const auto& p : pairing.points()) {
+          if (!p.paired) continue;
+          double best = 1e300;
+          int best_face = -1;
+          for (std::size_t m = 0; m < master.size(); ++m) {
+            const fem::Point t = x[master[m][1]] - x[master[m][0]];
+            const double eta = std::clamp((p.position - x[master[m][0]]).dot(t) / t.squaredNorm(), 0.0, 1.0);
+            const double d = (p.position - (x[master[m][0]] + eta * t)).squaredNorm();
+            if (d < best - 1e-30) {
+              best = d;
+              best_face = static_cast<int>(m);
+            }
+          }
+          ASSERT_EQ(p.master_face, best_face) << name << (mirrored ? " (mirrored)" : "") << ", shift " << a;
+          ++checked;
+        }
+      }
+    }
+  EXPECT_GT(checked, 1000);
 }

@@ -299,8 +299,9 @@ TEST(MechanicsVerification, SqueezeOnTheUpperHalfGivesTheWholeStacksContactsBelo
     for (double p : a[i].pressure) p_max = std::max(p_max, p);
     for (double t : a[i].shear) shear_max = std::max(shear_max, std::abs(t));
     ASSERT_EQ(a[i].pressure.size(), b[i].pressure.size()) << a[i].name;
-    if (a[i].name != "ss_1_2")  // between equal sheets friction has next to nothing to carry
+    if (a[i].name != "ss_1_2") {  // between equal sheets friction has next to nothing to carry
       EXPECT_GT(shear_max, 1e-2 * p_max) << a[i].name << ": friction carries shear";
+    }
     for (std::size_t k = 0; k < a[i].pressure.size(); ++k) {
       EXPECT_NEAR(b[i].pressure[k], a[i].pressure[k], 1e-4 * p_max) << a[i].name << " point " << k;
       EXPECT_NEAR(b[i].shear[k], a[i].shear[k], 1e-4 * p_max) << a[i].name << " point " << k;
