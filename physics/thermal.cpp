@@ -54,6 +54,7 @@ struct Thermal::Impl {
   std::vector<const materials::Material*> body_material;
   std::vector<const materials::Material*> cell_material;
   std::vector<char> melt_switch_cell;  // the cell's body switches to λ_m
+  std::vector<char> coefficient_cell;  // k and the melt state are evaluated on the cell (see the constructor)
   std::vector<const materials::Material*> node_material;
   int n_q;
 
@@ -156,6 +157,10 @@ struct Thermal::Impl {
     for (const auto& pairing : pairings) conductance.emplace_back(pairing.points().size(), 0.0);
     assembler = std::make_unique<fem::Assembler>(mesh, dofs, constraints, interfaces.dof_groups());
     assembler->set_mirror(s.mirror);
+    // The conductivities and melt states of a cell the assembler skips (an image cell
+    // under a mirror) serve only the reaction at fixed temperatures.
+    for (int e = 0; e < mesh.n_cells(); ++e)
+      coefficient_cell.push_back(assembler->cell_weight(e) > 0 || !s.fixed_temperatures.empty());
     history = contact::InterfaceHistory(pairings);
     trial_history = history;
 
@@ -233,7 +238,7 @@ struct Thermal::Impl {
   // T_melting.
   void update_melt_states() {
     for (int e = 0; e < mesh.n_cells(); ++e) {
-      if (!melt_switch_cell[e]) continue;
+      if (!melt_switch_cell[e] || !coefficient_cell[e]) continue;
       const auto& c = mesh.cells[e];
       const double T_m = cell_material[e]->melting_temperature();
       for (int q = 0; q < n_q; ++q) {
@@ -249,6 +254,7 @@ struct Thermal::Impl {
   void update_conductivities() {
     const double lambda_m = settings.melt_conductivity;
     for (int e = 0; e < mesh.n_cells(); ++e) {
+      if (!coefficient_cell[e]) continue;
       const auto& c = mesh.cells[e];
       const materials::Material& mat = *cell_material[e];
       const double T_m = mat.melting_temperature();
@@ -391,14 +397,23 @@ struct Thermal::Impl {
     }
   }
 
+  // H and H' at every node; an image node (whose T is its source's, by constraint)
+  // takes its source's values.
   void nodal_enthalpy() {
     H.resize(mesh.n_nodes());
     dH.resize(mesh.n_nodes());
     for (int n = 0; n < mesh.n_nodes(); ++n) {
+      if (settings.mirror.is_image(n)) continue;
       const materials::PropertyValue h = node_material[n]->enthalpy(T[n]);
       H[n] = h.value;
       dH[n] = h.slope;
     }
+    if (!settings.mirror.empty())
+      for (int n = 0; n < mesh.n_nodes(); ++n)
+        if (settings.mirror.is_image(n)) {
+          H[n] = H[settings.mirror.image_of[n]];
+          dH[n] = dH[settings.mirror.image_of[n]];
+        }
   }
 
   fem::Assembler::Terms terms() {
