@@ -110,11 +110,15 @@ bool InterfacePairing::update(const std::vector<fem::Point>& x) {
     boxes[m] = {std::min(m1.x(), m2.x()), std::max(m1.x(), m2.x()), std::min(m1.y(), m2.y()), std::max(m1.y(), m2.y())};
   }
   last_closest_.resize(points_.size(), -1);
-  std::vector<int> by_r(master_faces_.size()), nearby;
+  // A face with a coordinate that is not finite is never the closest (its distance is
+  // NaN), so it is left out of the search.
+  std::vector<int> by_r, nearby;
   double widest = 0;
   for (std::size_t m = 0; m < boxes.size(); ++m) {
-    by_r[m] = static_cast<int>(m);
-    widest = std::max(widest, boxes[m].r1 - boxes[m].r0);
+    const Box& box = boxes[m];
+    if (!std::isfinite(box.r0 + box.r1 + box.z0 + box.z1)) continue;
+    by_r.push_back(static_cast<int>(m));
+    widest = std::max(widest, box.r1 - box.r0);
   }
   std::sort(by_r.begin(), by_r.end(), [&](int a, int b) { return boxes[a].r0 < boxes[b].r0; });
   for (auto& p : points_) {
@@ -132,6 +136,8 @@ bool InterfacePairing::update(const std::vector<fem::Point>& x) {
     const std::size_t point = static_cast<std::size_t>(&p - points_.data());
     double bound = std::numeric_limits<double>::infinity();
     if (last_closest_[point] >= 0) bound = projection(x, last_closest_[point], p.position).distance2;
+    if (!(bound <= std::numeric_limits<double>::max()))  // NaN: that face has collapsed or is not finite
+      bound = std::numeric_limits<double>::infinity();
     bound = bound * (1 + 1e-6) + 1e-24;  // margin for rounding: 1 pm, or 10⁻⁶ of the distance²
     // Faces that may lie within the bound: by r (faces sorted by their smaller r,
     // none longer in r than `widest`), then by their boxes, in face order.

@@ -372,12 +372,12 @@ class SinglePrecisionCholesky {
       const int* r = rows_.data() + pi_[s];
       const int below = n_row - n_col;
       for (int i = 0; i < below; ++i) w[i] = z_[r[n_col + i]];
-      float* x = z_.data() + k1;
+      float* own = z_.data() + k1;  // the supernode's own unknowns
       for (int j = n_col - 1; j >= 0; --j) {
         const float* column = L + static_cast<std::ptrdiff_t>(j) * n_row;
         float known = dot_below(column + n_col, w, below);
-        for (int k = n_col - 1; k > j; --k) known += column[k] * x[k];
-        x[j] = (x[j] - known) / column[j];
+        for (int k = n_col - 1; k > j; --k) known += column[k] * own[k];
+        own[j] = (own[j] - known) / column[j];
       }
     }
     for (int k = 0; k < n_; ++k) x[perm_[k]] = z_[k];
