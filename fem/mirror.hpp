@@ -23,9 +23,10 @@
 // nodes (and plane nodes) only with weight 1, on image nodes (and plane nodes) only
 // with weight 0 (not assembled), and a term that couples both (an interface across the
 // plane, a cell the plane cuts) or lies in the plane with weight 1/2, since its mirror
-// is another such term or itself. The reduced residual is then the full residual's rows of the source nodes
-// (half of them for plane nodes), its zero the full problem's symmetric solution, its
-// Jacobian consistent: Newton's method converges as on the full mesh. What a term
+// is another such term or itself. The reduced residual is then the full residual's
+// rows of the source nodes (half of them for plane nodes), its zero the full problem's
+// symmetric solution, its Jacobian consistent: Newton's method converges as on the
+// full mesh. What a term
 // keeps as state (plasticity at the Gauss points of an image cell) is not updated:
 // report it from the source (cell_source below).
 //
