@@ -597,8 +597,8 @@ void PreconditionedGmres::set_preconditioner(const SparseMatrix& M, const Surrog
 }
 
 PreconditionedGmres::Report PreconditionedGmres::solve(const SparseMatrix& A, const Eigen::VectorXd& b,
-                                                       Eigen::VectorXd& x, double tolerance,
-                                                       int max_iterations) const {
+                                                       Eigen::VectorXd& x, double tolerance, int max_iterations,
+                                                       bool from_x) const {
   if (kind_ == Kind::none) throw std::logic_error("PreconditionedGmres: no preconditioner");
   const LinearSolver& M = kind_ == Kind::symmetric_part ? impl_->cholmod : impl_->umfpack;
   const bool single = single_precision_active();
@@ -619,7 +619,19 @@ PreconditionedGmres::Report PreconditionedGmres::solve(const SparseMatrix& A, co
   }
   // Stopped at half the tolerance on SPFGMR's residual estimate, so that the true
   // residual, which rounding moves away from the estimate, meets the tolerance.
-  report.iterations = impl_->gmres.solve(A, precondition, b, x, 0.5 * tolerance * beta, std::max(1, max_iterations));
+  const double delta = 0.5 * tolerance * beta;
+  if (from_x && x.size() == b.size() && x.allFinite()) {
+    // GMRES on the correction: A d = b − A x₀, to the same absolute residual.
+    const Eigen::VectorXd start = x;
+    const Eigen::VectorXd r0 = b - A * start;
+    if (!(r0.norm() <= delta)) {
+      Eigen::VectorXd d;
+      report.iterations = impl_->gmres.solve(A, precondition, r0, d, delta, std::max(1, max_iterations));
+      x = start + d;
+    }
+  } else {
+    report.iterations = impl_->gmres.solve(A, precondition, b, x, delta, std::max(1, max_iterations));
+  }
   report.relative_residual = (b - A * x).norm() / beta;
   report.converged = report.relative_residual <= tolerance;
   return report;
@@ -628,17 +640,20 @@ PreconditionedGmres::Report PreconditionedGmres::solve(const SparseMatrix& A, co
 PreconditionedGmres::Report PreconditionedGmres::solve_refreshing(const SparseMatrix& A, const Eigen::VectorXd& b,
                                                                   Eigen::VectorXd& x, double tolerance,
                                                                   int refresh_after, int max_iterations,
-                                                                  const Surrogate& surrogate) {
+                                                                  const Surrogate& surrogate, bool from_x) {
   if (!has_preconditioner() || last_iterations_ > refresh_after) set_preconditioner(A, surrogate);
-  Report report = solve(A, b, x, tolerance, max_iterations);
+  const Eigen::VectorXd start = from_x ? x : Eigen::VectorXd();
+  Report report = solve(A, b, x, tolerance, max_iterations, from_x);
   n_iterations_ += report.iterations;
   if (!report.converged) {
     set_preconditioner(A, surrogate);
-    report = solve(A, b, x, tolerance, max_iterations);
+    x = start;
+    report = solve(A, b, x, tolerance, max_iterations, from_x);
     n_iterations_ += report.iterations;
     if (!report.converged && impl_->single_active) {  // the rounding of the float copy hurt
       impl_->single_active = false;
-      report = solve(A, b, x, tolerance, max_iterations);
+      x = start;
+      report = solve(A, b, x, tolerance, max_iterations, from_x);
       n_iterations_ += report.iterations;
     }
     if (!report.converged) {

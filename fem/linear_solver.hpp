@@ -146,16 +146,20 @@ class PreconditionedGmres {
   int n_full_factorizations() const { return n_full_factorizations_; }  // LU of M itself
 
   // x with |b - A x| <= tolerance |b| after at most max_iterations GMRES iterations
-  // (no restart), starting from x = 0. Without convergence x is the last iterate.
+  // (no restart), starting from x = 0, or with `from_x` from the x given (if sized as
+  // b): GMRES then solves for the correction A d = b − A x to the same absolute
+  // residual, and none is needed if x meets the tolerance already. Without convergence
+  // x is the last iterate.
   Report solve(const SparseMatrix& A, const Eigen::VectorXd& b, Eigen::VectorXd& x, double tolerance,
-               int max_iterations) const;
+               int max_iterations, bool from_x = false) const;
   // The same with the refresh policy: the preconditioner is refactorised from A
   // before the solve when there is none or the previous solve of this object needed
   // more than `refresh_after` iterations, and after a solve that did not converge
   // within `max_iterations` (which is then repeated). Throws std::runtime_error if
   // even a fresh preconditioner does not converge.
   Report solve_refreshing(const SparseMatrix& A, const Eigen::VectorXd& b, Eigen::VectorXd& x, double tolerance,
-                          int refresh_after, int max_iterations, const Surrogate& surrogate = {});
+                          int refresh_after, int max_iterations, const Surrogate& surrogate = {},
+                          bool from_x = false);
   int n_iterations() const { return n_iterations_; }  // summed over solve_refreshing
 
  private:
