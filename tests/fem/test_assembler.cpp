@@ -458,6 +458,24 @@ TEST(PreconditionedGmres, SolvesUnsymmetricSystemsWithTheFactorOfASymmetricPart)
   const auto general = gmres.solve(B, b, x, 1e-12, 100);
   EXPECT_TRUE(general.converged);
   EXPECT_LT((x - exact_B).norm() / exact_B.norm(), 1e-10);
+
+  // The same with a supernodal factor, which reads the other triangle: B's
+  // preconditioner is that of B with the missing entry (29, 0) stored as zero.
+  fem::PreconditionedGmres supernodal;
+  supernodal.set_supernodal(true);
+  supernodal.set_single_precision(false);
+  fem::SparseMatrix B_full = B;
+  B_full.coeffRef(29, 0) = 0.0;
+  B_full.makeCompressed();
+  Eigen::VectorXd y_general, y_full;
+  supernodal.set_preconditioner(B);
+  const auto upper_general = supernodal.solve(B, b, y_general, 1e-12, 100);
+  supernodal.set_preconditioner(B_full);
+  const auto upper_full = supernodal.solve(B, b, y_full, 1e-12, 100);
+  EXPECT_TRUE(upper_general.converged);
+  EXPECT_EQ(upper_general.iterations, upper_full.iterations);
+  EXPECT_LT((y_general - exact_B).norm() / exact_B.norm(), 1e-10);
+  EXPECT_LT((y_general - y_full).norm() / y_full.norm(), 1e-13);
 }
 
 // Started from a nearby solution, GMRES solves for the correction to the same
