@@ -229,6 +229,41 @@ void Assembler::scatter_matrix(int element, const double* matrix, int n_local, d
   }
 }
 
+void Assembler::scatter_touched(int element, const double* matrix, int n_local, const std::vector<int>& touched,
+                                double* values) const {
+  // The entries scatter_matrix would add, in its order (column by column, rows
+  // ascending; zero entries skipped), so the sums are the same to the bit. The
+  // positions of element entry (row term i, column term j) lie at
+  // (j − s0) · column_size + (i − s0), s0 the element's first expansion term
+  // (scatter_matrix's order); with one term per dof that is b · n_local + a.
+  const int* start = expansion_start_.data() + offset_[element];
+  const Term* terms = expansion_.data();
+  const int* pos = positions_.data() + position_start_[element];
+  if (direct_matrix_[element]) {
+    for (int b : touched) {
+      const double* column = matrix + static_cast<std::ptrdiff_t>(b) * n_local;
+      const int* column_pos = pos + static_cast<std::ptrdiff_t>(b) * n_local;
+      for (int a : touched)
+        if (column[a] != 0.0) values[column_pos[a]] += column[a];
+    }
+    return;
+  }
+  const int column_size = expanded_size_[element];
+  const int s0 = start[0];
+  for (int b : touched) {
+    const double* column = matrix + static_cast<std::ptrdiff_t>(b) * n_local;
+    for (int j = start[b]; j < start[b + 1]; ++j) {
+      const double wq = terms[j].weight;
+      const int* column_pos = pos + static_cast<std::ptrdiff_t>(j - s0) * column_size;
+      for (int a : touched) {
+        const double kab = column[a] * wq;
+        if (kab == 0.0) continue;
+        for (int i = start[a]; i < start[a + 1]; ++i) values[column_pos[i - s0]] += terms[i].weight * kab;
+      }
+    }
+  }
+}
+
 void Assembler::scatter(int element, const LocalSystem& local, SparseMatrix& K, Eigen::VectorXd& F,
                         bool homogeneous, bool assemble_matrix) const {
   if (local.matrix_kept)
@@ -418,16 +453,42 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
       // points' friction history, which the image interface reports.
       const double w = element_weight(n_cells + g);
       const int n = static_cast<int>(element_dofs_[n_cells + g].size());
-      local.matrix.setZero(n, n);
+      if (static_cast<int>(zero_group_matrices_.size()) <= n) zero_group_matrices_.resize(n + 1);
+      Eigen::MatrixXd& zero = zero_group_matrices_[n];
+      if (zero.rows() != n) zero = Eigen::MatrixXd::Zero(n, n);
+      local.matrix.swap(zero);  // local.matrix: n x n zeros
       local.vector.setZero(n);
       local.matrix_kept = false;
+      local.lists_touched = false;
+      local.touched.clear();
       terms.groups(g, local);
-      if (w == 0.0) continue;
-      if (w != 1.0) {
-        local.matrix *= w;
-        local.vector *= w;
+      std::vector<int>& touched = local.touched;
+      if (local.lists_touched) {
+        std::sort(touched.begin(), touched.end());
+        touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
       }
-      scatter(n_cells + g, local, K, F, homogeneous, assemble_matrix);
+      if (w != 0.0) {
+        if (!local.lists_touched) {
+          if (w != 1.0) local.matrix *= w;
+          if (w != 1.0) local.vector *= w;
+          scatter(n_cells + g, local, K, F, homogeneous, assemble_matrix);
+        } else {
+          if (w != 1.0) {
+            for (int b : touched)
+              for (int a : touched) local.matrix(a, b) *= w;
+            local.vector *= w;
+          }
+          scatter_vector(n_cells + g, local.vector, local.matrix.data(), F, homogeneous);
+          if (assemble_matrix) scatter_touched(n_cells + g, local.matrix.data(), n, touched, K.valuePtr());
+        }
+      }
+      if (local.lists_touched) {
+        for (int b : touched)
+          for (int a : touched) local.matrix(a, b) = 0.0;
+      } else {
+        local.matrix.setZero();
+      }
+      local.matrix.swap(zero);  // returned zeroed
     }
   }
 }

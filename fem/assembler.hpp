@@ -57,6 +57,13 @@ struct LocalSystem {
   // bit the one it returned in its last matrix assembly by this assembler (only with
   // the cell-matrix cache, which then reuses its copy: enable_cell_matrix_cache()).
   bool matrix_kept = false;
+  // A group kernel (coupling groups, below) sets lists_touched and lists in `touched`
+  // every local dof whose row or column of `matrix` it writes (repeats allowed). Its
+  // system is mostly zero (each contact point touches four of the group's nodes), and
+  // the assembler then zeroes and scatters only the touched rows and columns. Without
+  // lists_touched the whole matrix is scanned.
+  bool lists_touched = false;
+  std::vector<int> touched;
 };
 
 class Assembler {
@@ -126,6 +133,10 @@ class Assembler {
   // values[position] += the condensed entries of the local matrix `matrix` (column-major,
   // n_local x n_local) of `element`; zero entries are skipped.
   void scatter_matrix(int element, const double* matrix, int n_local, double* values) const;
+  // The same over the entries in rows and columns `touched` (sorted, unique) only: every
+  // other entry of `matrix` is zero.
+  void scatter_touched(int element, const double* matrix, int n_local, const std::vector<int>& touched,
+                       double* values) const;
   // Cell part with the incremental cache: local matrices compared with the kept ones,
   // differences scattered into cache_sum_.
   void scatter_cached(int cell, const LocalSystem& local, Eigen::VectorXd& F, bool homogeneous,
@@ -160,6 +171,9 @@ class Assembler {
   // Threaded assembly (partition()): per thread count, the cells of each block that
   // its thread assembles, and the cells on block borders, assembled serially.
   void partition(int n_threads) const;
+  // Zero n x n matrices for the group kernels, by n (assemble(): a group's system is
+  // taken from here and returned zeroed).
+  mutable std::vector<Eigen::MatrixXd> zero_group_matrices_;
   mutable int partitioned_threads_ = 0;
   mutable std::vector<std::vector<int>> blocks_;
   mutable std::vector<int> border_cells_;

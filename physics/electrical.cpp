@@ -217,6 +217,7 @@ struct Electrical::Impl {
 
   // Σ_points h_e A (v_s − v_m)(φ_s − φ_m) over the points of one slave face.
   void group_kernel(int g, const std::vector<std::vector<double>>& h, fem::LocalSystem& local) const {
+    local.lists_touched = true;
     const auto [p, f] = interfaces.groups()[g];
     const auto& pairing = (*contact->pairings)[p];
     for (int k = 0; k < pairing.n_gauss(); ++k) {
@@ -228,6 +229,7 @@ struct Electrical::Impl {
       const std::array<int, 4>& node = stencil.node;
       const std::array<double, 4>& jump = stencil.jump;
       const double c = h[p][i] * pt.area;
+      local.touched.insert(local.touched.end(), node.begin(), node.end());
       for (int a = 0; a < 4; ++a)
         for (int b = 0; b < 4; ++b) local.matrix(node[a], node[b]) += c * jump[a] * jump[b];
     }

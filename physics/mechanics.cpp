@@ -565,6 +565,7 @@ struct Mechanics::Impl {
     void add(fem::LocalSystem& local, const Vector8& v, const Matrix8& m) const {
       for (int i = 0; i < 8; ++i) {
         const int r = 2 * node_of[i / 2] + i % 2;
+        local.touched.push_back(r);
         local.vector[r] += v[i];
         for (int j = 0; j < 8; ++j) local.matrix(r, 2 * node_of[j / 2] + j % 2) += m(i, j);
       }
@@ -577,6 +578,7 @@ struct Mechanics::Impl {
   // four nodes (two slave, two master): its terms are formed on those 8 dofs and
   // added into the face's coupling system at their local positions.
   void group_kernel(int g, fem::LocalSystem& local) {
+    local.lists_touched = true;  // PointDofs::add lists the dofs it writes
     const auto [p, f] = groups[g];
     const auto& pairing = pass(p);
     PointDofs point_dofs;

@@ -370,6 +370,7 @@ struct Thermal::Impl {
   // Thermal contact and interface heat at the points of one slave face:
   // R += h (T_s − T_m)(v_s − v_m) A − q_s (v_s + v_m)/2 A.
   void group_kernel(int g, fem::LocalSystem& local, double* interface_power) {
+    local.lists_touched = true;
     const auto [p, f] = groups[g];
     const auto& pairing = (*contact->pairings)[p];
     for (int k = 0; k < pairing.n_gauss(); ++k) {
@@ -389,6 +390,7 @@ struct Thermal::Impl {
       const double T_s = contact::slave_value(pt, T);
       const double T_m = contact::master_value(pt, T);
       const double A = pt.area;
+      local.touched.insert(local.touched.end(), node.begin(), node.end());
       for (int a = 0; a < 4; ++a) {
         local.vector[node[a]] -= h * (T_s - T_m) * A * jump[a] - q_s * A * mean[a];
         for (int b = 0; b < 4; ++b) local.matrix(node[a], node[b]) += h * A * jump[a] * jump[b];

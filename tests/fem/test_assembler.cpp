@@ -11,6 +11,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
@@ -75,7 +76,9 @@ TEST(Assembler, CondensedSystemEqualsExplicitProlongation) {
   Eigen::MatrixXd K_full = Eigen::MatrixXd::Zero(n, n);
   Eigen::VectorXd F_full = Eigen::VectorXd::Zero(n);
   for (int e = 0; e < mesh.n_cells(); ++e) {
-    fem::LocalSystem l{Eigen::MatrixXd::Zero(4, 4), Eigen::VectorXd::Zero(4)};
+    fem::LocalSystem l;
+    l.matrix = Eigen::MatrixXd::Zero(4, 4);
+    l.vector = Eigen::VectorXd::Zero(4);
     laplace_kernel(mesh, e, l);
     for (int a = 0; a < 4; ++a) {
       F_full[mesh.cells[e][a]] += l.vector[a];
@@ -103,6 +106,72 @@ TEST(Assembler, CondensedSystemEqualsExplicitProlongation) {
 // A cell kernel that throws (an inverted cell) inside the parallel colour loop: the
 // exception reaches the caller, whatever the thread count, instead of terminating the
 // process (an exception may not leave an OpenMP region).
+// A coupling group's kernel that lists the dofs it writes (LocalSystem::touched) is
+// zeroed and scattered over those rows and columns only: K and F are those of the
+// whole-matrix scan to the bit, on groups of free, hanging (constrained) and fixed
+// dofs, and a second assembly with other kernels' entries finds the group matrices
+// zeroed again.
+TEST(Assembler, GroupKernelListingItsDofsGivesTheWholeMatrixAssembly) {
+  ConstrainedScalarMesh s;
+  std::vector<int> hanging;
+  for (const auto& h : s.mesh.hanging_nodes) hanging.push_back(h.node);
+  ASSERT_GE(hanging.size(), 2u);
+  const int n = s.dofs.n_dofs();
+  // Three groups of 24 dofs: every third dof, a run with the hanging nodes, the last ones.
+  std::vector<std::vector<int>> groups(3);
+  for (int d = 0; d < 24; ++d) {
+    groups[0].push_back((3 * d) % n);
+    groups[1].push_back(d < 2 ? hanging[d] : (d * 7 + 1) % n);
+    groups[2].push_back(n - 1 - d);
+  }
+  for (auto& g : groups) {
+    std::sort(g.begin(), g.end());
+    g.erase(std::unique(g.begin(), g.end()), g.end());
+  }
+  // Each group couples two sets of four local dofs (shifted by `shift`), with values
+  // that differ per entry and a zero among them.
+  auto kernel = [&](int shift, bool list) {
+    return [&groups, shift, list](int g, fem::LocalSystem& local) {
+      local.lists_touched = list;
+      const int size = static_cast<int>(groups[g].size());
+      for (int set = 0; set < 2; ++set) {
+        std::array<int, 4> node{};
+        for (int a = 0; a < 4; ++a) node[a] = (shift + 5 * set + 3 * a + g) % size;
+        if (list) local.touched.insert(local.touched.end(), node.begin(), node.end());
+        for (int a = 0; a < 4; ++a) {
+          local.vector[node[a]] += 0.5 + a + set;
+          for (int b = 0; b < 4; ++b)
+            local.matrix(node[a], node[b]) += (a == 1 && b == 2) ? 0.0 : 1.0 + 0.1 * a + 0.01 * b + g + 0.3 * set;
+        }
+      }
+    };
+  };
+  fem::Assembler assembler(s.mesh, s.dofs, s.c, groups);
+  auto assemble = [&](int shift, bool list, fem::SparseMatrix& K, Eigen::VectorXd& F) {
+    fem::Assembler::Terms terms;
+    terms.cells = [&](int e, fem::LocalSystem& l) { laplace_kernel(s.mesh, e, l); };
+    terms.groups = kernel(shift, list);
+    assembler.assemble(terms, K, F);
+  };
+  for (int shift : {0, 2}) {
+    fem::SparseMatrix K_whole, K_listed;
+    Eigen::VectorXd F_whole, F_listed;
+    assemble(shift, false, K_whole, F_whole);
+    assemble(shift, true, K_listed, F_listed);
+    ASSERT_EQ(K_whole.nonZeros(), K_listed.nonZeros());
+    EXPECT_TRUE(std::equal(K_whole.valuePtr(), K_whole.valuePtr() + K_whole.nonZeros(), K_listed.valuePtr()))
+        << "shift " << shift;
+    EXPECT_EQ(F_whole, F_listed) << "shift " << shift;
+    // The groups add to K: the listed assembly is not the cells' alone.
+    fem::SparseMatrix K_cells;
+    Eigen::VectorXd F_cells;
+    fem::Assembler::Terms cells_only;
+    cells_only.cells = [&](int e, fem::LocalSystem& l) { laplace_kernel(s.mesh, e, l); };
+    assembler.assemble(cells_only, K_cells, F_cells);
+    EXPECT_GT((Eigen::MatrixXd(K_listed) - Eigen::MatrixXd(K_cells)).norm(), 1.0);
+  }
+}
+
 TEST(Assembler, ExceptionOfACellKernelReachesTheCaller) {
   const fem::Mesh mesh = small_mesh();
   fem::DofMap dofs(mesh, 1);
