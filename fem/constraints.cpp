@@ -96,13 +96,6 @@ void Constraints::close() {
   closed_ = true;
 }
 
-std::pair<const Constraints::Entry*, const Constraints::Entry*> Constraints::expansion(int dof) const {
-  const Entry* base = expansion_entries_.data();
-  return {base + expansion_start_[dof], base + expansion_start_[dof + 1]};
-}
-
-double Constraints::inhomogeneity(int dof) const { return resolved_inhomogeneity_[dof]; }
-
 Eigen::VectorXd Constraints::distribute(const Eigen::VectorXd& reduced, bool homogeneous) const {
   if (!closed_) throw std::logic_error("Constraints::distribute before close()");
   if (reduced.size() != n_free_) throw std::invalid_argument("Constraints::distribute: size mismatch");

@@ -64,8 +64,12 @@ class Constraints {
   int free_index(int dof) const { return free_index_[dof]; }
   // x_dof = Σ_k weight_k · y[free_k] + inhomogeneity(dof), in the reduced numbering.
   // A free dof expands to itself with weight 1.
-  std::pair<const Entry*, const Entry*> expansion(int dof) const;
-  double inhomogeneity(int dof) const;
+  // (Both inline: the assembly's scatter asks for every dof of every element.)
+  std::pair<const Entry*, const Entry*> expansion(int dof) const {
+    const Entry* base = expansion_entries_.data();
+    return {base + expansion_start_[dof], base + expansion_start_[dof + 1]};
+  }
+  double inhomogeneity(int dof) const { return resolved_inhomogeneity_[dof]; }
 
   // Full vector from reduced unknowns: x = P y + g (g omitted when homogeneous).
   Eigen::VectorXd distribute(const Eigen::VectorXd& reduced, bool homogeneous = false) const;
