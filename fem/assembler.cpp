@@ -453,10 +453,14 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
       // points' friction history, which the image interface reports.
       const double w = element_weight(n_cells + g);
       const int n = static_cast<int>(element_dofs_[n_cells + g].size());
-      if (static_cast<int>(zero_group_matrices_.size()) <= n) zero_group_matrices_.resize(n + 1);
+      if (static_cast<int>(zero_group_matrices_.size()) <= n) {
+        zero_group_matrices_.resize(n + 1);
+        zero_group_valid_.resize(n + 1, 0);
+      }
       Eigen::MatrixXd& zero = zero_group_matrices_[n];
-      if (zero.rows() != n) zero = Eigen::MatrixXd::Zero(n, n);
-      local.matrix.swap(zero);  // local.matrix: n x n zeros
+      if (!zero_group_valid_[n]) zero.setZero(n, n);
+      zero_group_valid_[n] = 0;  // until it is returned zeroed below (a kernel may throw)
+      local.matrix.swap(zero);   // local.matrix: n x n zeros
       local.vector.setZero(n);
       local.matrix_kept = false;
       local.lists_touched = false;
@@ -489,6 +493,7 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
         local.matrix.setZero();
       }
       local.matrix.swap(zero);  // returned zeroed
+      zero_group_valid_[n] = 1;
     }
   }
 }

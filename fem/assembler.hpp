@@ -172,8 +172,9 @@ class Assembler {
   // its thread assembles, and the cells on block borders, assembled serially.
   void partition(int n_threads) const;
   // Zero n x n matrices for the group kernels, by n (assemble(): a group's system is
-  // taken from here and returned zeroed).
+  // taken from here and returned zeroed; not valid if a kernel threw meanwhile).
   mutable std::vector<Eigen::MatrixXd> zero_group_matrices_;
+  mutable std::vector<char> zero_group_valid_;
   mutable int partitioned_threads_ = 0;
   mutable std::vector<std::vector<int>> blocks_;
   mutable std::vector<int> border_cells_;

@@ -110,7 +110,7 @@ TEST(Assembler, CondensedSystemEqualsExplicitProlongation) {
 // zeroed and scattered over those rows and columns only: K and F are those of the
 // whole-matrix scan to the bit, on groups of free, hanging (constrained) and fixed
 // dofs, and a second assembly with other kernels' entries finds the group matrices
-// zeroed again.
+// zeroed again, also after a kernel threw.
 TEST(Assembler, GroupKernelListingItsDofsGivesTheWholeMatrixAssembly) {
   ConstrainedScalarMesh s;
   std::vector<int> hanging;
@@ -170,6 +170,20 @@ TEST(Assembler, GroupKernelListingItsDofsGivesTheWholeMatrixAssembly) {
     assembler.assemble(cells_only, K_cells, F_cells);
     EXPECT_GT((Eigen::MatrixXd(K_listed) - Eigen::MatrixXd(K_cells)).norm(), 1.0);
   }
+  // A kernel that throws after writing leaves no entries behind for the next assembly.
+  fem::SparseMatrix K_whole, K_after;
+  Eigen::VectorXd F_whole, F_after;
+  assemble(0, false, K_whole, F_whole);
+  fem::Assembler::Terms throwing;
+  throwing.cells = [&](int e, fem::LocalSystem& l) { laplace_kernel(s.mesh, e, l); };
+  throwing.groups = [&](int g, fem::LocalSystem& local) {
+    kernel(1, true)(g, local);
+    if (g == 1) throw std::runtime_error("group kernel failed");
+  };
+  EXPECT_THROW(assembler.assemble(throwing, K_after, F_after), std::runtime_error);
+  assemble(0, true, K_after, F_after);
+  EXPECT_TRUE(std::equal(K_whole.valuePtr(), K_whole.valuePtr() + K_whole.nonZeros(), K_after.valuePtr()));
+  EXPECT_EQ(F_whole, F_after);
 }
 
 TEST(Assembler, ExceptionOfACellKernelReachesTheCaller) {
