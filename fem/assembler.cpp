@@ -473,8 +473,10 @@ void Assembler::assemble(const Terms& terms, SparseMatrix& K, Eigen::VectorXd& F
       }
       if (w != 0.0) {
         if (!local.lists_touched) {
-          if (w != 1.0) local.matrix *= w;
-          if (w != 1.0) local.vector *= w;
+          if (w != 1.0) {
+            local.matrix *= w;
+            local.vector *= w;
+          }
           scatter(n_cells + g, local, K, F, homogeneous, assemble_matrix);
         } else {
           if (w != 1.0) {

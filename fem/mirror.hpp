@@ -26,9 +26,8 @@
 // is another such term or itself. The reduced residual is then the full residual's
 // rows of the source nodes (half of them for plane nodes), its zero the full problem's
 // symmetric solution, its Jacobian consistent: Newton's method converges as on the
-// full mesh. What a term
-// keeps as state (plasticity at the Gauss points of an image cell) is not updated:
-// report it from the source (cell_source below).
+// full mesh. What a term keeps as state (plasticity at the Gauss points of an image
+// cell) is not updated: report it from the source (cell_source below).
 //
 // The symmetry of the mesh is checked node by node and cell by cell; that of the
 // coefficients, loads and boundary conditions is the caller's to ensure.
