@@ -152,12 +152,15 @@ bool InterfacePairing::update(const std::vector<fem::Point>& x) {
       if (dr * dr + dz * dz <= bound) nearby.push_back(*it);
     }
     std::sort(nearby.begin(), nearby.end());
+    // Equally close: within 10⁻⁹ of the distance², the rounding of two projections on
+    // the same master node through its two faces (which differ in the last bits, and
+    // by more with fused multiply-adds), so that face order and not rounding decides.
     double best = 1e300;
     int best_face = -1;
     double best_eta = 0, best_eta_raw = 0;
     for (const int m : nearby) {
       const Projection pr = projection(x, m, p.position);
-      if (pr.distance2 < best - 1e-30) {
+      if (pr.distance2 < best * (1 - 1e-9) - 1e-30) {
         best = pr.distance2;
         best_face = static_cast<int>(m);
         best_eta = pr.eta;

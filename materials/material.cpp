@@ -105,7 +105,11 @@ PropertyValue Material::thermal_strain(double temperature,
   const PropertyValue alpha = secant_expansion(temperature);
   const double alpha_0 = secant_expansion(stress_free_temperature).value;
   const double rise = temperature - reference_temperature;
-  return {alpha.value * rise - alpha_0 * (stress_free_temperature - reference_temperature),
+  // α(T)(T − T_ref) − α_0 (T_0 − T_ref), written as (α(T) − α_0)(T − T_ref) + α_0 (T − T_0):
+  // exactly zero at T = T_0 however the products are rounded (a fused multiply-add
+  // leaves the rounding error of one of two equal products otherwise), and without
+  // the cancellation of two large terms near T_0.
+  return {(alpha.value - alpha_0) * rise + alpha_0 * (temperature - stress_free_temperature),
           alpha.slope * rise + alpha.value};
 }
 

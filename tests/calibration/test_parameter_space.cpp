@@ -20,7 +20,7 @@ double integrate_density(const Prior& prior, double v_lower, double v_upper, Tra
   const double h = (v_upper - v_lower) / n_intervals;
   double sum = 0;
   for (int i = 0; i <= n_intervals; ++i) {
-    const double v = v_lower + i * h;
+    const double v = i == n_intervals ? v_upper : v_lower + i * h;  // the last node exactly at the bound
     const double weight = (i == 0 || i == n_intervals) ? 1 : (i % 2 == 1 ? 4 : 2);
     sum += weight * std::exp(prior.log_density(x_of(v))) * dx_dv(v);
   }
