@@ -16,9 +16,6 @@
 #ifndef RSW_VERSION
 #define RSW_VERSION "unknown"
 #endif
-#ifndef RSW_ARCH
-#define RSW_ARCH ""
-#endif
 
 namespace rsw::physics {
 
@@ -138,10 +135,6 @@ void ContactProfiles::add(double t, const std::vector<InterfaceState>& states) {
 }
 
 namespace {
-// The instruction set the build targets (RSW_ARCH, tools/rsw_arch.cmake), for the
-// provenance of a result: the last bits of the signals depend on it.
-const char* build_arch() { return RSW_ARCH[0] ? RSW_ARCH : "default"; }
-
 // One line on each of the run's final nugget and energy values (results.h5).
 std::string nugget_description(const std::string& name) {
   static const std::map<std::string, std::string> known = {
@@ -229,7 +222,6 @@ void write_results_h5(const fs::path& file, const Problem& problem, const RunRes
   describe("/run/config", "", "the resolved weld case: every key, in display units (YAML)");
   h5.set_attribute("/run", "version", std::string(RSW_VERSION));
   h5.set_attribute("/run", "git_commit", std::string(RSW_GIT_COMMIT));
-  h5.set_attribute("/run", "build_arch", std::string(build_arch()));
   h5.set_attribute("/run", "case", problem.name);
   h5.set_attribute("/run", "wall_time", std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count());
   h5.set_attribute("/run", "squeeze_indentation", result.squeeze_indentation);
@@ -261,7 +253,6 @@ void write_summary_json(const fs::path& file, const Problem& problem, const RunR
   for (const auto& [part, seconds] : result.timing) j["timing_s"][part] = seconds;
   j["version"] = RSW_VERSION;
   j["git_commit"] = RSW_GIT_COMMIT;
-  j["build_arch"] = build_arch();
   j["case"] = problem.name;
   j["wall_time_s"] = result.wall_time;
   j["weld_steps"] = result.n_steps;

@@ -5,8 +5,7 @@
 #   tests/data/weld_coarse_signals_exact.csv  WeldRun.CoarseRunSignalsAreBitIdenticalToTheStoredReference
 #       (every signal at every time step as hexadecimal floats, compared bit for bit)
 # Both are the paper's case on a coarse mesh (0.5 mm base, one refinement level) on one
-# thread. The exact one records the instruction set of the build that made it
-# (RSW_ARCH); the test compares bits only in a build for the same one. Run it only after a change that is meant to alter the results, and say why
+# thread. Run it only after a change that is meant to alter the results, and say why
 # in the commit.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -35,12 +34,9 @@ import h5py
 with h5py.File(sys.argv[1], "r") as h5:
     names = sorted(h5["signals"].keys())
     columns = [list(h5["signals"][n][()]) for n in names]
-    arch = h5["run"].attrs["build_arch"]
-    arch = arch.decode() if isinstance(arch, bytes) else str(arch)
 with open(sys.argv[2], "w") as f:
     f.write("# Every signal of the paper case on a coarse mesh, one thread, as hexadecimal floats (bit-exact);\n")
     f.write("# regenerate with tools/regenerate_weld_reference.sh\n")
-    f.write("# build_arch: " + arch + "\n")  # the bits depend on the instruction set (tools/rsw_arch.cmake)
     f.write(",".join(names) + "\n")
     for row in zip(*columns):
         f.write(",".join(float(v).hex() for v in row) + "\n")

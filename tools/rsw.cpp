@@ -34,17 +34,10 @@
 #ifndef RSW_VERSION
 #define RSW_VERSION "unknown"
 #endif
-#ifndef RSW_ARCH
-#define RSW_ARCH ""
-#endif
 
 int main(int argc, char** argv) {
   CLI::App app{"rsw: resistance spot welding simulation and calibration"};
-  // The instruction set the build targets (RSW_ARCH, tools/rsw_arch.cmake): results
-  // differ in their last bits between builds for different ones.
-  const std::string arch = RSW_ARCH[0] ? RSW_ARCH : "the compiler's default";
-  app.set_version_flag("--version",
-                       std::string("rsw ") + RSW_VERSION + " (commit " + RSW_GIT_COMMIT + ", built for " + arch + ")");
+  app.set_version_flag("--version", std::string("rsw ") + RSW_VERSION + " (commit " + RSW_GIT_COMMIT + ")");
   app.require_subcommand(1);
   // One simulation uses one core by default: studies run one process per core, and
   // OpenMP threads that spin while other processes hold the cores slow a run down

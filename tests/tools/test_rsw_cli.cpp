@@ -67,28 +67,6 @@ TEST(RswCli, UsageErrorsExitTwoAndHelpAndVersionExitZero) {
   EXPECT_EQ(run_rsw("--version").status, 0);
 }
 
-// A build copied to a processor without an instruction-set extension it was compiled
-// for (RSW_ARCH) stops before running any of its code, naming the extension and how
-// to rebuild, with status 1 (tools/cpu_check.cpp). The probe is built for AMD's SSE4a.
-TEST(RswCli, BuildForAnExtensionTheProcessorLacksStopsNamingIt) {
-#ifndef RSW_CPU_CHECK_PROBE
-  GTEST_SKIP() << "the start-up check exists for GCC on x86-64 only";
-#else
-  __builtin_cpu_init();
-  if (__builtin_cpu_supports("sse4a")) GTEST_SKIP() << "this processor has SSE4a: the probe has nothing to report";
-  std::string output;
-  const std::string cmd = std::string(RSW_CPU_CHECK_PROBE) + " 2>&1";
-  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
-  std::array<char, 4096> buf;
-  while (fgets(buf.data(), buf.size(), pipe.get())) output += buf.data();
-  const int status = WEXITSTATUS(pclose(pipe.release()));
-  EXPECT_EQ(status, 1) << output;
-  EXPECT_EQ(output, "rsw: this build uses the SSE4a instructions, which this processor does not have; rebuild rsw "
-                    "on this machine (cmake -S . -B build -DRSW_ARCH= for any x86-64 processor; "
-                    "docs/PERFORMANCE.md)\n");
-#endif
-}
-
 TEST(RswMesh, WritesMeshThatVtkReadsBackAndReportsWeldZoneSize) {
   const fs::path dir = fresh_dir("mesh");
   const CommandResult r = run_rsw("mesh " + paper_case + " -o " + dir.string());
@@ -163,8 +141,7 @@ TEST(RswSimulate, SqueezeRunWritesReadableResultsAndFields) {
   std::stringstream summary;
   summary << summary_file.rdbuf();
   EXPECT_NE(summary.str().find("\"git_commit\": \"" + commit + "\""), std::string::npos);
-  EXPECT_NE(run_rsw("--version").output.find("(commit " + commit + ", built for "), std::string::npos);
-  EXPECT_EQ(h5.string_attribute("/run", "build_arch"), std::string(RSW_ARCH).empty() ? "default" : RSW_ARCH);
+  EXPECT_NE(run_rsw("--version").output.find("(commit " + commit + ")"), std::string::npos);
   const auto steps = rsw::fem::read_pvd(dir / "fields.pvd");
   ASSERT_EQ(steps.size(), 3u);  // fields every 5 ms (output.field_interval): 0, 5 and 10 ms
   const auto last = rsw::fem::read_vtm(steps.back().file);
