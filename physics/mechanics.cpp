@@ -183,10 +183,32 @@ struct Mechanics::Impl {
 
   // One contact pass per mesh interface, and a mirrored pass for each two-pass
   // interface, with the normal penalty ε_N and the area weight of each pass.
+  //
+  // Under a mirror symmetry, an interface whose one side is the image of the other
+  // (the sheet/sheet interface in the plane z = 0) keeps its first pass alone, with
+  // the whole area: its mirrored pass is that pass's mirror image, which the mirror
+  // already adds to the upper half (its coupling groups hold source and image nodes
+  // and count half, fem/mirror.hpp). The sum is the same in exact arithmetic (the
+  // paper's case: features equal to 2·10⁻¹⁴), but two passes computed apart differ in
+  // their rounding, and once the sheets melt that difference decides the weld's path:
+  // noise of 2·10⁻¹⁶ on the contact points' radii folded a cell or left worst cells of
+  // 0.004–0.22 with both passes, and changes nothing with one (docs/VERIFICATION.md,
+  // "Round-off sensitivity").
   void setup_contact_passes(const MechanicsSettings& s, const std::vector<const materials::Material*>& body_materials,
                             double T0) {
+    auto mirrored_by_symmetry = [&](const fem::InterfacePair& sides) {
+      if (s.mirror.empty()) return false;
+      auto all = [&](const std::string& side, bool image) {
+        for (int n : mesh.boundary_nodes(side))
+          if (s.mirror.is_image(n) != image) return false;
+        return true;
+      };
+      return (all(sides.first, false) && all(sides.second, true)) || (all(sides.first, true) && all(sides.second, false));
+    };
     auto two_pass = [&](const std::string& name) {
-      return std::find(s.two_pass_interfaces.begin(), s.two_pass_interfaces.end(), name) != s.two_pass_interfaces.end();
+      return std::find(s.two_pass_interfaces.begin(), s.two_pass_interfaces.end(), name) !=
+                 s.two_pass_interfaces.end() &&
+             !mirrored_by_symmetry(mesh.interfaces.at(name));
     };
     for (const auto& name : s.two_pass_interfaces)
       if (!mesh.interfaces.count(name)) throw std::out_of_range("two-pass contact: unknown interface '" + name + "'");
