@@ -83,7 +83,9 @@ struct MechanicsSettings {
   double contact_smoothing = case_default("solver.contact_smoothing");  // m, δ of the C¹ penalty law (see below)
   // Interfaces treated in two passes (docs/MECHANICS.md, "Contact"): besides the
   // named slave/master pass, a mirrored pass with the roles swapped, each pass with
-  // half the area weight, so that two sides of the same kind are loaded alike.
+  // half the area weight, so that two sides of the same kind are loaded alike. Under
+  // a mirror (below), an interface whose one side is the other's image keeps its
+  // first pass alone with the whole area weight: the second is its mirror image.
   // pairings(), interface_states() and contact_pressure() show the first pass.
   std::vector<std::string> two_pass_interfaces;
   // Seating aid: under displacement control, bodies with no support of their own
