@@ -197,13 +197,8 @@ struct Mechanics::Impl {
   void setup_contact_passes(const MechanicsSettings& s, const std::vector<const materials::Material*>& body_materials,
                             double T0) {
     auto mirrored_by_symmetry = [&](const fem::InterfacePair& sides) {
-      if (s.mirror.empty()) return false;
-      auto all = [&](const std::string& side, bool image) {
-        for (int n : mesh.boundary_nodes(side))
-          if (s.mirror.is_image(n) != image) return false;
-        return true;
-      };
-      return (all(sides.first, false) && all(sides.second, true)) || (all(sides.first, true) && all(sides.second, false));
+      const std::vector<int> first = mesh.boundary_nodes(sides.first), second = mesh.boundary_nodes(sides.second);
+      return fem::are_images(s.mirror, second, first) || fem::are_images(s.mirror, first, second);
     };
     auto two_pass = [&](const std::string& name) {
       return std::find(s.two_pass_interfaces.begin(), s.two_pass_interfaces.end(), name) !=

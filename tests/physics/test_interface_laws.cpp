@@ -665,14 +665,13 @@ TEST(MechanicalContactLaws, RegularisedCoulombSticksSaturatesAndHasExactDerivati
 // The pairing's closest-face search skips faces that cannot beat the last closest
 // face; it must still pick, at every point, the face an exhaustive search picks (the
 // first in face order among equally close ones, within 10⁻⁹ of the distance²: a point
-// facing a master node), and
-// leave a point unpaired only beyond a free end of the master side. The default weld
-// mesh's interfaces (both passes) are moved through a sequence of displacement fields
-// (shears of up to 0.4 mm along r, a bulge, noise of ±20 µm), so that the last closest
-// face is often no longer the closest (and points face master nodes, whose two faces give
-// distances that differ in the last bits); through a master node that is not a number and
-// a master face collapsed to a point (neither can be closest); and back to rest, where
-// slave and master nodes coincide.
+// facing a master node), and leave a point unpaired only beyond a free end of the
+// master side. The default weld mesh's interfaces (both passes) are moved through a
+// sequence of displacement fields (shears of up to 0.4 mm along r, a bulge, noise of
+// ±20 µm), so that the last closest face is often no longer the closest (and points
+// face master nodes, whose two faces give distances that differ in the last bits);
+// through a master node that is not a number and a master face collapsed to a point
+// (neither can be closest); and back to rest, where slave and master nodes coincide.
 TEST(InterfacePairing, PrunedSearchPicksTheFaceAnExhaustiveSearchPicks) {
   const physics::Problem problem = physics::make_problem(fem::Config(physics::weld_case_schema()));
   const fem::Mesh mesh = meshes::weld_mesh(problem.geometry, problem.mesh);
