@@ -54,6 +54,9 @@ class LinearSolver {
   bool kept_pivots() const;
   // Solution of A x = b with the last factorisation.
   Eigen::VectorXd solve(const Eigen::VectorXd& b) const;
+  // A X = B for several right-hand sides at once (CHOLMOD and UMFPACK: one blocked
+  // solve; KLU: column by column).
+  Eigen::MatrixXd solve_columns(const Eigen::MatrixXd& B) const;
   // Steps of iterative refinement in UMFPACK solves (UMFPACK's default: 2; each costs
   // a product with A and a solve). Other kinds ignore it.
   void set_refinement_steps(int steps);
@@ -67,6 +70,35 @@ class LinearSolver {
   std::unique_ptr<Impl> impl_;
   int n_analyses_ = 0;
   void analyze(const SparseMatrix& A);  // of the used pattern
+};
+
+// Cholesky factor P A Pᵀ = L Lᵀ of a symmetric positive definite matrix
+//     A = [A_II  A_IB]
+//         [A_BI  A_BB]
+// whose last n_border unknowns (the border B) are eliminated after all others (CHOLMOD
+// with a constrained minimum-degree ordering, CAMD, that keeps B last). Its trailing
+// block then holds the Schur complement of the leading block I,
+//     L_BB L_BBᵀ = A_BB − A_BI A_II⁻¹ A_IB,
+// and its leading columns are the factor of A_II alone, so one factorisation gives
+// both the condensed border matrix and solves with A_II (InteriorElimination). The
+// ordering is found once per pattern. Only A's lower triangle is read.
+class BorderedCholesky {
+ public:
+  BorderedCholesky();
+  ~BorderedCholesky();
+  BorderedCholesky(BorderedCholesky&&) noexcept;
+  BorderedCholesky& operator=(BorderedCholesky&&) noexcept;
+  // False (nothing kept) if A is not positive definite.
+  bool factorize(const SparseMatrix& A, int n_border);
+  // A_BB − A_BI A_II⁻¹ A_IB, n_border × n_border, in A's order of B.
+  const Eigen::MatrixXd& schur_complement() const { return schur_; }
+  // x = A_II⁻¹ b over the leading n − n_border unknowns; x and b may be the same.
+  void solve_leading(const double* b, double* x) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  Eigen::MatrixXd schur_;
 };
 
 // Componentwise relative backward error of an approximate solution x of A x = b
@@ -173,6 +205,7 @@ class PreconditionedGmres {
   int n_full_factorizations_ = 0;
   int n_iterations_ = 0;
   int last_iterations_ = 0;
+  Eigen::Index size_ = -1;  // rows of the matrix the preconditioner was factorised from
 };
 
 }  // namespace rsw::fem

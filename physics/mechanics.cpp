@@ -4,6 +4,7 @@
 
 #include "contact/mechanical_contact.hpp"
 #include "fem/fe_values.hpp"
+#include "fem/interior_elimination.hpp"
 #include "fem/mirror.hpp"
 
 #include <algorithm>
@@ -62,6 +63,7 @@ struct Mechanics::Impl {
   }
   std::unique_ptr<fem::Assembler> force_assembler, displacement_assembler;
   fem::PreconditionedGmres force_gmres, displacement_gmres;
+  fem::InteriorElimination elimination;  // of the force-controlled systems (setup_elimination)
   // Trial tangent and residual of the Newton iterations, kept between calls: a fresh
   // sparse matrix per call of iterate() copied the whole pattern (about 1 ms on the
   // paper's mesh, once per step).
@@ -140,7 +142,32 @@ struct Mechanics::Impl {
     setup_constraints(settings);
     setup_contact_passes(settings, body_materials, T0);
     setup_assemblers();
+    setup_elimination();
     allocate_state(T0);
+  }
+
+  // The free unknowns eliminated from the force-controlled Newton systems: those of
+  // the nodes farther than settings.interior_elimination_distance from every contact
+  // face of their body. Far from its contact faces an electrode stays cold and
+  // elastic.
+  void setup_elimination() {
+    const double reach = settings.interior_elimination_distance;
+    if (!(reach > 0)) return;
+    std::vector<std::vector<fem::Point>> contact(mesh.n_bodies());  // per body
+    for (const auto& [name, pair] : mesh.interfaces)
+      for (const auto* side : {&pair.first, &pair.second})
+        for (int n : mesh.boundary_nodes(*side)) contact[mesh.node_body[n]].push_back(mesh.nodes[n]);
+    std::vector<char> interior(force_constraints.n_free(), 0);
+    for (int n = 0; n < mesh.n_nodes(); ++n) {
+      const fem::Point& x = mesh.nodes[n];
+      const auto& faces = contact[mesh.node_body[n]];
+      const bool far = std::none_of(faces.begin(), faces.end(),
+                                    [&](const fem::Point& c) { return (x - c).squaredNorm() < reach * reach; });
+      if (!far) continue;
+      for (int c = 0; c < 2; ++c)
+        if (const int f = force_constraints.free_index(dofs.dof(n, c)); f >= 0) interior[f] = 1;
+    }
+    elimination = fem::InteriorElimination(std::move(interior));
   }
 
   // Bodies without a support of their own get the seating foundation κ = k / V.
@@ -874,8 +901,19 @@ struct Mechanics::Impl {
       previous_norm = norm_now;
       Eigen::VectorXd dy;
       try {
-        gmres.solve_refreshing(K, Rs, dy, eta, /*refresh_after=*/10, /*max_iterations=*/40,
-                               [&]() -> const fem::SparseMatrix& { return preconditioner_surrogate(ctrl, K); });
+        if (ctrl == Control::force && elimination.prepare(K)) {
+          // GMRES on the unknowns that remain, to the same absolute residual.
+          const Eigen::VectorXd r = elimination.reduce(Rs, 0.01 * 0.5 * eta * Rs.norm());
+          Eigen::VectorXd dy_reduced;
+          gmres.solve_refreshing(elimination.reduced(), r, dy_reduced, eta * Rs.norm() / std::max(r.norm(), 1e-300),
+                                 /*refresh_after=*/10, /*max_iterations=*/40, [&]() -> const fem::SparseMatrix& {
+                                   return elimination.reduce_matrix(preconditioner_surrogate(ctrl, K));
+                                 });
+          dy = elimination.expand(Rs, dy_reduced);
+        } else {
+          gmres.solve_refreshing(K, Rs, dy, eta, /*refresh_after=*/10, /*max_iterations=*/40,
+                                 [&]() -> const fem::SparseMatrix& { return preconditioner_surrogate(ctrl, K); });
+        }
       } catch (const std::exception& e) {
         report.message = std::string("linear solve failed: ") + e.what();
         return Outcome::failed;
@@ -1072,6 +1110,10 @@ MechanicsSolverCounts Mechanics::solver_counts() const {
     c.cell_matrices_scattered += assembler->cell_matrices_scattered();
     c.cell_matrices_reused += assembler->cell_matrices_reused();
   }
+  c.condensations = impl_->elimination.n_condensations();
+  c.condensations_reused = impl_->elimination.n_reuses();
+  c.interior_unknowns = impl_->elimination.n_interior();
+  c.border_unknowns = impl_->elimination.n_border();
   return c;
 }
 

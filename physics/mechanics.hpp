@@ -106,6 +106,14 @@ struct MechanicsSettings {
   // their force and tangent from the linear update f(Δu*) − K_e (Δu − Δu*) instead of
   // their Gauss points; equal to round-off (false: every cell at its Gauss points).
   bool linear_elastic_updates = true;
+  // m: the unknowns of the nodes farther than this from every contact face of their
+  // body (the electrodes' interiors) are eliminated from the force-controlled Newton
+  // systems before GMRES (fem/interior_elimination.hpp): the same solution to
+  // round-off. Such a region stays elastic, so its stiffness changes once per step
+  // (with the temperature), not between Newton iterations; nearer to the contact the
+  // electrode yields under the squeeze on the default weld (within 1.5 mm). 0 or
+  // less: none.
+  double interior_elimination_distance = 2e-3;
   int n_gauss = 2;
   bool verbose = false;                   // print Newton iterations to stderr
   // Supports: u_z = 0 on `fixed_boundary`; the nodes of `loaded_boundary` share one
@@ -157,6 +165,9 @@ struct MechanicsSolverCounts {
   long lu_factorisations = 0;       // of which fell back to the LU of the tangent
   long cell_matrices_scattered = 0;  // cell matrices assembled (new or changed)
   long cell_matrices_reused = 0;     // unchanged cell matrices taken from the previous assembly
+  long condensations = 0;           // factorisations of the eliminated interior (InteriorElimination)
+  long condensations_reused = 0;    // Newton systems solved with an earlier one
+  int interior_unknowns = 0, border_unknowns = 0;  // eliminated, and coupled to them
 };
 
 class Mechanics {

@@ -519,7 +519,11 @@ void WeldDriver::finish() {
                                       {"surrogates", c.surrogates},
                                       {"lu_factorisations", c.lu_factorisations},
                                       {"cell_matrices_scattered", c.cell_matrices_scattered},
-                                      {"cell_matrices_reused", c.cell_matrices_reused}};
+                                      {"cell_matrices_reused", c.cell_matrices_reused},
+                                      {"interior_unknowns", c.interior_unknowns},
+                                      {"border_unknowns", c.border_unknowns},
+                                      {"condensations", c.condensations},
+                                      {"condensations_reused", c.condensations_reused}};
   const ThermalSolverCounts t = thermal_->solver_counts();
   result_.thermal_linear_algebra = {{"solves", t.solves}, {"factorisations", t.factorisations}};
 

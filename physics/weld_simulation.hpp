@@ -82,7 +82,8 @@ struct RunResult {
   int n_coupling_splits = 0;        // weld steps (or parts) halved after the coupling failed
   double first_coupling_split_end = std::nan("");  // s, end of the first step solved in parts
   // Linear algebra of the mechanics (gmres_iterations, factorisations, surrogates,
-  // lu_factorisations, cell_matrices_scattered, cell_matrices_reused; see
+  // lu_factorisations, cell_matrices_scattered, cell_matrices_reused,
+  // interior_unknowns, border_unknowns, condensations, condensations_reused; see
   // MechanicsSolverCounts).
   std::vector<std::pair<std::string, long>> mechanics_linear_algebra;
   // Linear algebra of the thermal solves (solves, factorisations; ThermalSolverCounts).

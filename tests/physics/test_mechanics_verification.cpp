@@ -407,3 +407,64 @@ TEST(MechanicsVerification, LinearUpdatesOfElasticCellsGiveTheGaussPointSolution
   EXPECT_LT(du, 1e-9 * gauss.u.lpNorm<Eigen::Infinity>());
   EXPECT_LT(ds, 1e-6 * smax);
 }
+
+// The electrodes' interiors eliminated before GMRES (fem::InteriorElimination): the
+// squeeze and three heated steps of the coarse default case give the whole system's
+// solution within Newton's own tolerance (a step stops once its estimated remaining
+// error is below solver.mechanics_error_estimate, 1 nm; the two Newton paths differ
+// by the linear solves' rounding and tolerance), with the interior condensed once per
+// step and reused in between.
+TEST(MechanicsVerification, EliminatedElectrodeInteriorsGiveTheWholeSystemsSolution) {
+  const CoarseStack stack = coarse_default_stack();
+  const physics::Problem& problem = stack.problem;
+  const fem::Mesh& mesh = stack.mesh;
+  const double F = problem.schedule.force.at(0.0);
+  struct Outcome {
+    Eigen::VectorXd u;
+    std::vector<physics::PointStress> stresses;
+    int iterations = 0;
+    physics::MechanicsSolverCounts counts;
+  };
+  auto run = [&](double distance) {
+    physics::MechanicsSettings s;
+    s.friction_coefficient = problem.contact.friction_coefficient;
+    s.interior_elimination_distance = distance;
+    physics::Mechanics mech(mesh, {&stack.copper, &stack.steel, &stack.steel, &stack.copper}, s, 20.0);
+    Outcome out;
+    const auto squeezed = physics::squeeze(mech, F, Eigen::VectorXd::Constant(mesh.n_nodes(), 20.0));
+    EXPECT_TRUE(squeezed.converged) << squeezed.message;
+    for (const auto& st : squeezed.steps) out.iterations += st.iterations;
+    mech.set_time_step(1e-3);
+    for (int k = 1; k <= 3; ++k) {
+      Eigen::VectorXd T(mesh.n_nodes());
+      for (int n = 0; n < mesh.n_nodes(); ++n)
+        T[n] = 20.0 + 300.0 * k * std::exp(-mesh.nodes[n].squaredNorm() / (3e-3 * 3e-3));
+      const auto report = mech.solve_force_step(F, T);
+      EXPECT_TRUE(report.converged) << report.message;
+      out.iterations += report.iterations;
+      mech.commit();
+    }
+    out.u = mech.displacement();
+    out.stresses = mech.point_stresses();
+    out.counts = mech.solver_counts();
+    return out;
+  };
+  const Outcome whole = run(0.0), eliminated = run(2e-3);
+  double du = (eliminated.u - whole.u).lpNorm<Eigen::Infinity>(), ds = 0, smax = 0;
+  for (std::size_t i = 0; i < whole.stresses.size(); ++i) {
+    ds = std::max(ds, (eliminated.stresses[i].stress - whole.stresses[i].stress).lpNorm<Eigen::Infinity>());
+    smax = std::max(smax, whole.stresses[i].stress.lpNorm<Eigen::Infinity>());
+  }
+  const auto& c = eliminated.counts;
+  std::printf("interior elimination: %d interior and %d border unknowns, %ld condensations, %ld reused; Newton "
+              "iterations %d / %d; largest difference %.2e m of %.2e m, %.2e Pa of %.2e Pa\n",
+              c.interior_unknowns, c.border_unknowns, c.condensations, c.condensations_reused, eliminated.iterations,
+              whole.iterations, du, whole.u.lpNorm<Eigen::Infinity>(), ds, smax);
+  EXPECT_EQ(whole.counts.interior_unknowns, 0);
+  EXPECT_GT(c.interior_unknowns, 1000);
+  EXPECT_GT(c.condensations, 3);
+  EXPECT_GT(c.condensations_reused, c.condensations);
+  EXPECT_NEAR(eliminated.iterations, whole.iterations, 3);
+  EXPECT_LT(du, physics::MechanicsSettings{}.mechanics_error_estimate);
+  EXPECT_LT(ds, 1e-5 * smax);
+}
