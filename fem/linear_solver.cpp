@@ -270,24 +270,67 @@ Eigen::VectorXd LinearSolver::solve(const Eigen::VectorXd& b) const {
   return {};
 }
 
-Eigen::MatrixXd LinearSolver::solve_columns(const Eigen::MatrixXd& B) const {
-  switch (kind_) {
-    case SolverKind::cholmod:
-      if (impl_->upper) return impl_->cholmod_upper.solve(B);
-      return impl_->cholmod.solve(B);
-    case SolverKind::umfpack: return impl_->umfpack.solve(B);
-    case SolverKind::klu: {
-      Eigen::MatrixXd X(B.rows(), B.cols());
-      for (Eigen::Index j = 0; j < B.cols(); ++j) X.col(j) = impl_->klu.solve(B.col(j));
-      return X;
-    }
-  }
-  return {};
-}
-
 Eigen::VectorXd LinearSolver::solve(const SparseMatrix& A, const Eigen::VectorXd& b) {
   factorize(A);
   return solve(b);
+}
+
+// The two sweeps of a supernodal triangular solve with L (CHOLMOD's layout: supernode s
+// holds columns super[s]..super[s+1]−1 and the rows rows[pi[s]..pi[s+1]−1], the first
+// of them the columns themselves, as a dense column-major block at values + px[s]),
+// on the first n_solved columns only, in place on z; w is a work vector as long as the
+// tallest supernode. Each supernode is one sweep over its block, column by column:
+// forward, the column's unknown and then an axpy down the rest of the column (into the
+// block's own unknowns and the work vector for the rows below, scattered afterwards);
+// backward, the column's dot product with the known values of the rows below the
+// block's triangle (gathered once per supernode, `dot`), then the triangle's own terms.
+// The same flops as a dense triangular solve plus a matrix-vector product per
+// supernode, without their per-call set-up, which dominated on supernodes of ~12
+// columns (docs/PERFORMANCE.md). Where n_solved ends inside a supernode, the forward
+// sweep leaves what the solved columns add to the later rows in z, and the backward
+// sweep reads the later rows of z as they are.
+template <typename T>
+void supernodal_forward(const int* super, const int* pi, const int* px, const int* rows, const T* values, int n_super,
+                        int n_solved, T* z, T* w) {
+  using Vector = Eigen::Map<Eigen::Matrix<T, Eigen::Dynamic, 1>>;
+  using ConstVector = Eigen::Map<const Eigen::Matrix<T, Eigen::Dynamic, 1>>;
+  for (int s = 0; s < n_super && super[s] < n_solved; ++s) {
+    const int k1 = super[s], n_own = super[s + 1] - k1, n_col = std::min(super[s + 1], n_solved) - k1;
+    const int n_row = pi[s + 1] - pi[s];
+    const T* L = values + px[s];
+    std::copy(z + k1, z + k1 + n_own, w);
+    std::fill(w + n_own, w + n_row, T(0));
+    for (int j = 0; j < n_col; ++j) {
+      const T* column = L + static_cast<std::ptrdiff_t>(j) * n_row;
+      const T x = w[j] / column[j];
+      w[j] = x;
+      const int rest = n_row - j - 1;
+      if (rest > 0) Vector(w + j + 1, rest).noalias() -= x * ConstVector(column + j + 1, rest);
+    }
+    std::copy(w, w + n_own, z + k1);
+    const int* r = rows + pi[s];
+    for (int i = n_own; i < n_row; ++i) z[r[i]] += w[i];
+  }
+}
+template <typename T, typename Dot>
+void supernodal_backward(const int* super, const int* pi, const int* px, const int* rows, const T* values,
+                         int n_super, int n_solved, T* z, T* w, Dot dot) {
+  for (int s = n_super - 1; s >= 0; --s) {
+    const int k1 = super[s];
+    if (k1 >= n_solved) continue;
+    const int n_own = super[s + 1] - k1, n_col = std::min(super[s + 1], n_solved) - k1, n_row = pi[s + 1] - pi[s];
+    const T* L = values + px[s];
+    const int* r = rows + pi[s];
+    const int below = n_row - n_own;
+    for (int i = 0; i < below; ++i) w[i] = z[r[n_own + i]];
+    T* own = z + k1;  // the supernode's own unknowns
+    for (int j = n_col - 1; j >= 0; --j) {
+      const T* column = L + static_cast<std::ptrdiff_t>(j) * n_row;
+      T known = dot(column + n_own, w, below);
+      for (int k = n_own - 1; k > j; --k) known += column[k] * own[k];
+      own[j] = (own[j] - known) / column[j];
+    }
+  }
 }
 
 // A CHOLMOD view of a compressed matrix's lower triangle (no copy).
@@ -307,6 +350,18 @@ static cholmod_sparse lower_triangle_view(const SparseMatrix& A) {
   view.packed = 1;
   return view;
 }
+
+// The arrays of a supernodal CHOLMOD factor (int indices, real values).
+struct SupernodalArrays {
+  const int *super, *pi, *px, *rows, *perm;
+  const double* x;
+  int n_super;
+  explicit SupernodalArrays(const cholmod_factor* L)
+      : super(static_cast<const int*>(L->super)), pi(static_cast<const int*>(L->pi)),
+        px(static_cast<const int*>(L->px)), rows(static_cast<const int*>(L->s)),
+        perm(static_cast<const int*>(L->Perm)), x(static_cast<const double*>(L->x)),
+        n_super(static_cast<int>(L->nsuper)) {}
+};
 
 struct BorderedCholesky::Impl {
   cholmod_common common;
@@ -367,23 +422,18 @@ bool BorderedCholesky::factorize(const SparseMatrix& A, int n_border) {
   if (m.common.status != CHOLMOD_OK || m.L->minor < m.L->n || !m.L->is_super) return false;
   // L_BB from the supernodes holding the last n_border columns, then L_BB L_BBᵀ.
   const int n_lead = n - n_border;
-  const int* super = static_cast<const int*>(m.L->super);
-  const int* pi = static_cast<const int*>(m.L->pi);
-  const int* px = static_cast<const int*>(m.L->px);
-  const int* rows = static_cast<const int*>(m.L->s);
-  const double* x = static_cast<const double*>(m.L->x);
-  const int* P = static_cast<const int*>(m.L->Perm);
+  const SupernodalArrays f(m.L);
   Eigen::MatrixXd L_BB = Eigen::MatrixXd::Zero(n_border, n_border);
-  for (int s = 0; s < static_cast<int>(m.L->nsuper); ++s) {
-    const int k1 = super[s], k2 = super[s + 1], n_row = pi[s + 1] - pi[s];
+  for (int s = 0; s < f.n_super; ++s) {
+    const int k1 = f.super[s], k2 = f.super[s + 1], n_row = f.pi[s + 1] - f.pi[s];
     for (int j = std::max(k1, n_lead); j < k2; ++j)
       for (int t = j - k1; t < n_row; ++t)
-        L_BB(rows[pi[s] + t] - n_lead, j - n_lead) = x[px[s] + static_cast<std::ptrdiff_t>(j - k1) * n_row + t];
+        L_BB(f.rows[f.pi[s] + t] - n_lead, j - n_lead) = f.x[f.px[s] + static_cast<std::ptrdiff_t>(j - k1) * n_row + t];
   }
   const Eigen::MatrixXd T = L_BB.triangularView<Eigen::Lower>() * L_BB.transpose();
   schur_.resize(n_border, n_border);
   for (int b = 0; b < n_border; ++b)
-    for (int a = 0; a < n_border; ++a) schur_(P[n_lead + a] - n_lead, P[n_lead + b] - n_lead) = T(a, b);
+    for (int a = 0; a < n_border; ++a) schur_(f.perm[n_lead + a] - n_lead, f.perm[n_lead + b] - n_lead) = T(a, b);
   return true;
 }
 
@@ -391,59 +441,21 @@ void BorderedCholesky::solve_leading(const double* b, double* out) const {
   const Impl& m = *impl_;
   if (!m.L) throw std::logic_error("BorderedCholesky::solve_leading before factorize()");
   const int n = static_cast<int>(m.L->n), n_lead = n - m.n_border;
-  const int* super = static_cast<const int*>(m.L->super);
-  const int* pi = static_cast<const int*>(m.L->pi);
-  const int* px = static_cast<const int*>(m.L->px);
-  const int* rows = static_cast<const int*>(m.L->s);
-  const double* x = static_cast<const double*>(m.L->x);
-  const int* P = static_cast<const int*>(m.L->Perm);
-  const int n_super = static_cast<int>(m.L->nsuper);
+  const SupernodalArrays f(m.L);
   std::vector<double>& z = m.z;
   z.assign(n, 0.0);
   m.work.resize(n);
   double* w = m.work.data();
-  for (int k = 0; k < n_lead; ++k) z[k] = b[P[k]];
-  using Vector = Eigen::Map<Eigen::VectorXd>;
-  using ConstVector = Eigen::Map<const Eigen::VectorXd>;
-  // L_II y = P b, supernode by supernode in a work vector (its own rows, then the
-  // rows below, scattered afterwards): the leading columns only; what they add to the
-  // border rows is dropped.
-  for (int s = 0; s < n_super && super[s] < n_lead; ++s) {
-    const int k1 = super[s], n_own = super[s + 1] - k1, n_col = std::min(super[s + 1], n_lead) - k1;
-    const int n_row = pi[s + 1] - pi[s];
-    const double* L = x + px[s];
-    std::copy(z.data() + k1, z.data() + k1 + n_own, w);
-    std::fill(w + n_own, w + n_row, 0.0);
-    for (int j = 0; j < n_col; ++j) {
-      const double* column = L + static_cast<std::ptrdiff_t>(j) * n_row;
-      const double y = w[j] / column[j];
-      w[j] = y;
-      const int rest = n_row - j - 1;
-      if (rest > 0) Vector(w + j + 1, rest).noalias() -= y * ConstVector(column + j + 1, rest);
-    }
-    std::copy(w, w + n_own, z.data() + k1);
-    const int* r = rows + pi[s];
-    for (int i = n_own; i < n_row; ++i) z[r[i]] += w[i];
-  }
+  for (int k = 0; k < n_lead; ++k) z[k] = b[f.perm[k]];
+  // L_II y = P b on the leading columns (what they add to the border rows is
+  // dropped), then L_IIᵀ v = y with the border rows zero (they add nothing).
+  supernodal_forward(f.super, f.pi, f.px, f.rows, f.x, f.n_super, n_lead, z.data(), w);
   std::fill(z.begin() + n_lead, z.end(), 0.0);
-  // L_IIᵀ v = y (the border rows are zero, so they add nothing).
-  for (int s = n_super - 1; s >= 0; --s) {
-    const int k1 = super[s];
-    if (k1 >= n_lead) continue;
-    const int n_own = super[s + 1] - k1, n_col = std::min(super[s + 1], n_lead) - k1, n_row = pi[s + 1] - pi[s];
-    const double* L = x + px[s];
-    const int* r = rows + pi[s];
-    const int below = n_row - n_own;
-    for (int i = 0; i < below; ++i) w[i] = z[r[n_own + i]];
-    double* own = z.data() + k1;
-    for (int j = n_col - 1; j >= 0; --j) {
-      const double* column = L + static_cast<std::ptrdiff_t>(j) * n_row;
-      double known = ConstVector(column + n_own, below).dot(ConstVector(w, below));
-      for (int k = n_own - 1; k > j; --k) known += column[k] * own[k];
-      own[j] = (own[j] - known) / column[j];
-    }
-  }
-  for (int k = 0; k < n_lead; ++k) out[P[k]] = z[k];
+  supernodal_backward(f.super, f.pi, f.px, f.rows, f.x, f.n_super, n_lead, z.data(), w,
+                      [](const double* l, const double* v, int count) {
+                        return Eigen::Map<const Eigen::VectorXd>(l, count).dot(Eigen::Map<const Eigen::VectorXd>(v, count));
+                      });
+  for (int k = 0; k < n_lead; ++k) out[f.perm[k]] = z[k];
 }
 
 double componentwise_backward_error(const SparseMatrix& A, const Eigen::VectorXd& x, const Eigen::VectorXd& b) {
@@ -492,15 +504,8 @@ class SinglePrecisionCholesky {
     return true;
   }
 
-  // Each supernode is one sweep over its block, column by column: forward, the
-  // column's unknown and then an axpy down the rest of the column (into the block's own
-  // unknowns and a work vector for the rows below, scattered afterwards); backward, the
-  // column's dot product with the known values of the rows below the block's triangle
-  // (gathered once per supernode), then the triangle's own terms. The same flops as a
-  // dense triangular solve plus a matrix-vector product per supernode, but without
-  // their per-call set-up, which dominated on supernodes of ~12 columns
-  // (docs/PERFORMANCE.md).
-  //
+  // The two sweeps are supernodal_forward and supernodal_backward, the backward's dot
+  // products below the supernodes' triangles by dot_below:
   // Σ_i l_i w_i over n terms as `lanes` partial sums (term i into sum i mod lanes),
   // added up in order: a fixed order that the compiler vectorises on any x86-64.
   static constexpr int lanes = 8;
@@ -517,41 +522,12 @@ class SinglePrecisionCholesky {
 
   // x = Pᵀ L⁻ᵀ L⁻¹ P b; x and b may be the same vector.
   void solve(const double* b, double* x) const {
-    using Vector = Eigen::Map<Eigen::VectorXf>;
-    using ConstVector = Eigen::Map<const Eigen::VectorXf>;
     for (int k = 0; k < n_; ++k) z_[k] = static_cast<float>(b[perm_[k]]);
     const int n_super = static_cast<int>(super_.size()) - 1;
-    float* w = work_.data();
-    for (int s = 0; s < n_super; ++s) {  // L y = P b
-      const int k1 = super_[s], n_col = super_[s + 1] - k1, n_row = pi_[s + 1] - pi_[s];
-      const float* L = values_.data() + px_[s];
-      std::copy(z_.data() + k1, z_.data() + k1 + n_col, w);
-      std::fill(w + n_col, w + n_row, 0.0f);
-      for (int j = 0; j < n_col; ++j) {
-        const float* column = L + static_cast<std::ptrdiff_t>(j) * n_row;
-        const float x = w[j] / column[j];
-        w[j] = x;
-        const int rest = n_row - j - 1;
-        if (rest > 0) Vector(w + j + 1, rest).noalias() -= x * ConstVector(column + j + 1, rest);
-      }
-      std::copy(w, w + n_col, z_.data() + k1);
-      const int* r = rows_.data() + pi_[s];
-      for (int i = n_col; i < n_row; ++i) z_[r[i]] += w[i];
-    }
-    for (int s = n_super - 1; s >= 0; --s) {  // Lᵀ z = y
-      const int k1 = super_[s], n_col = super_[s + 1] - k1, n_row = pi_[s + 1] - pi_[s];
-      const float* L = values_.data() + px_[s];
-      const int* r = rows_.data() + pi_[s];
-      const int below = n_row - n_col;
-      for (int i = 0; i < below; ++i) w[i] = z_[r[n_col + i]];
-      float* own = z_.data() + k1;  // the supernode's own unknowns
-      for (int j = n_col - 1; j >= 0; --j) {
-        const float* column = L + static_cast<std::ptrdiff_t>(j) * n_row;
-        float known = dot_below(column + n_col, w, below);
-        for (int k = n_col - 1; k > j; --k) known += column[k] * own[k];
-        own[j] = (own[j] - known) / column[j];
-      }
-    }
+    supernodal_forward(super_.data(), pi_.data(), px_.data(), rows_.data(), values_.data(), n_super, n_, z_.data(),
+                       work_.data());
+    supernodal_backward(super_.data(), pi_.data(), px_.data(), rows_.data(), values_.data(), n_super, n_, z_.data(),
+                        work_.data(), dot_below);
     for (int k = 0; k < n_; ++k) x[perm_[k]] = z_[k];
   }
 

@@ -54,9 +54,6 @@ class LinearSolver {
   bool kept_pivots() const;
   // Solution of A x = b with the last factorisation.
   Eigen::VectorXd solve(const Eigen::VectorXd& b) const;
-  // A X = B for several right-hand sides at once (CHOLMOD and UMFPACK: one blocked
-  // solve; KLU: column by column).
-  Eigen::MatrixXd solve_columns(const Eigen::MatrixXd& B) const;
   // Steps of iterative refinement in UMFPACK solves (UMFPACK's default: 2; each costs
   // a product with A and a solve). Other kinds ignore it.
   void set_refinement_steps(int steps);

@@ -50,6 +50,29 @@ CoarseStack coarse_default_stack() {
   materials::MaterialLibrary library;
   return {std::move(problem), std::move(mesh), library.load("CuCrZr"), library.load("DP1200")};
 }
+
+// The squeeze of the coarse stack at the case's force, then three committed 1 ms steps
+// heated by a Gaussian of 300 K per step about the centre (radius `width`); the Newton
+// iterations of all of them.
+int squeeze_and_heat(physics::Mechanics& mech, const CoarseStack& stack, double width) {
+  const fem::Mesh& mesh = stack.mesh;
+  const double F = stack.problem.schedule.force.at(0.0);
+  int iterations = 0;
+  const auto squeezed = physics::squeeze(mech, F, Eigen::VectorXd::Constant(mesh.n_nodes(), 20.0));
+  EXPECT_TRUE(squeezed.converged) << squeezed.message;
+  for (const auto& st : squeezed.steps) iterations += st.iterations;
+  mech.set_time_step(1e-3);
+  for (int k = 1; k <= 3; ++k) {
+    Eigen::VectorXd T(mesh.n_nodes());
+    for (int n = 0; n < mesh.n_nodes(); ++n)
+      T[n] = 20.0 + 300.0 * k * std::exp(-mesh.nodes[n].squaredNorm() / (width * width));
+    const auto report = mech.solve_force_step(F, T);
+    EXPECT_TRUE(report.converged) << report.message;
+    iterations += report.iterations;
+    mech.commit();
+  }
+  return iterations;
+}
 }  // namespace
 
 // A disc with a hanging-node corner heated uniformly by 100 K expands freely:
@@ -357,7 +380,6 @@ TEST(MechanicsVerification, LinearUpdatesOfElasticCellsGiveTheGaussPointSolution
   const physics::Problem& problem = stack.problem;
   const fem::Mesh& mesh = stack.mesh;
   const materials::Material &copper = stack.copper, &steel = stack.steel;
-  const double F = problem.schedule.force.at(0.0);
   struct Outcome {
     Eigen::VectorXd u;
     std::vector<physics::PointStress> stresses;
@@ -371,19 +393,7 @@ TEST(MechanicsVerification, LinearUpdatesOfElasticCellsGiveTheGaussPointSolution
     s.linear_elastic_updates = linear;
     physics::Mechanics mech(mesh, {&copper, &steel, &steel, &copper}, s, 20.0);
     Outcome out;
-    const auto squeezed = physics::squeeze(mech, F, Eigen::VectorXd::Constant(mesh.n_nodes(), 20.0));
-    EXPECT_TRUE(squeezed.converged) << squeezed.message;
-    for (const auto& st : squeezed.steps) out.iterations += st.iterations;
-    mech.set_time_step(1e-3);
-    for (int k = 1; k <= 3; ++k) {
-      Eigen::VectorXd T(mesh.n_nodes());
-      for (int n = 0; n < mesh.n_nodes(); ++n)
-        T[n] = 20.0 + 300.0 * k * std::exp(-mesh.nodes[n].squaredNorm() / (1.5e-3 * 1.5e-3));
-      const auto report = mech.solve_force_step(F, T);
-      EXPECT_TRUE(report.converged) << report.message;
-      out.iterations += report.iterations;
-      mech.commit();
-    }
+    out.iterations = squeeze_and_heat(mech, stack, 1.5e-3);
     out.u = mech.displacement();
     out.stresses = mech.point_stresses();
     out.linear = mech.linear_cell_updates();
@@ -418,7 +428,6 @@ TEST(MechanicsVerification, EliminatedElectrodeInteriorsGiveTheWholeSystemsSolut
   const CoarseStack stack = coarse_default_stack();
   const physics::Problem& problem = stack.problem;
   const fem::Mesh& mesh = stack.mesh;
-  const double F = problem.schedule.force.at(0.0);
   struct Outcome {
     Eigen::VectorXd u;
     std::vector<physics::PointStress> stresses;
@@ -431,19 +440,7 @@ TEST(MechanicsVerification, EliminatedElectrodeInteriorsGiveTheWholeSystemsSolut
     s.interior_elimination_distance = distance;
     physics::Mechanics mech(mesh, {&stack.copper, &stack.steel, &stack.steel, &stack.copper}, s, 20.0);
     Outcome out;
-    const auto squeezed = physics::squeeze(mech, F, Eigen::VectorXd::Constant(mesh.n_nodes(), 20.0));
-    EXPECT_TRUE(squeezed.converged) << squeezed.message;
-    for (const auto& st : squeezed.steps) out.iterations += st.iterations;
-    mech.set_time_step(1e-3);
-    for (int k = 1; k <= 3; ++k) {
-      Eigen::VectorXd T(mesh.n_nodes());
-      for (int n = 0; n < mesh.n_nodes(); ++n)
-        T[n] = 20.0 + 300.0 * k * std::exp(-mesh.nodes[n].squaredNorm() / (3e-3 * 3e-3));
-      const auto report = mech.solve_force_step(F, T);
-      EXPECT_TRUE(report.converged) << report.message;
-      out.iterations += report.iterations;
-      mech.commit();
-    }
+    out.iterations = squeeze_and_heat(mech, stack, 3e-3);
     out.u = mech.displacement();
     out.stresses = mech.point_stresses();
     out.counts = mech.solver_counts();
