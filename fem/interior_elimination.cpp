@@ -160,7 +160,11 @@ bool InteriorElimination::condense(const SparseMatrix& K) {
   for (int u = 0; u < interior_columns_end; ++u)
     if (!(std::abs(b[u] - v[bordered_mirror_[u]]) <= 1e-12 * scale)) return false;
   const int nb = n_border(), ni = n_interior();
-  if (!factor_.factorize(bordered_, nb)) return false;  // not positive definite
+  try {
+    if (!factor_.factorize(bordered_, nb)) return false;  // not positive definite
+  } catch (const std::runtime_error&) {
+    return false;  // no ordering or analysis: the caller solves with K itself
+  }
   // C = K_BB − (K_BB − K_BI K_II⁻¹ K_IB), with K_BB as factorised (its lower triangle).
   C_ = -factor_.schur_complement();
   for (int c = 0; c < nb; ++c)
