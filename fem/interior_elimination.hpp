@@ -58,11 +58,12 @@ class InteriorElimination {
   // surrogate): S exactly where M's interior rows and columns are K's.
   const SparseMatrix& reduce_matrix(const SparseMatrix& M);
   // r_A − K_AI K_II⁻¹ r_I for the prepared K (r over all unknowns); r_A alone where
-  // |r_I|₂ ≤ negligible. After a solve by expand() r_I is zero but for rounding (and
-  // for the step length, where a caller shortens y): a caller that solves the reduced
-  // system to a residual ε may neglect |r_I| ≤ ε/100, as the term it drops is about
-  // that size (K_AI K_II⁻¹ transfers the interior loads to the border), and save a
-  // solve with K_II.
+  // |r_I|₂ ≤ negligible. Where the interior's equations are linear (an elastic
+  // region), a Newton step solved by expand() leaves the next residual's interior part
+  // zero but for rounding ((1 − α) r_I after a step shortened to α): a caller that
+  // solves the reduced system to a residual ε may neglect |r_I| ≤ ε/100, as the term
+  // it drops is about that size (K_AI K_II⁻¹ transfers the interior loads to the
+  // border), and save a solve with K_II.
   Eigen::VectorXd reduce(const Eigen::VectorXd& r, double negligible = 0) const;
   // The whole solution y of K y = r from the solution y_A of the reduced system.
   Eigen::VectorXd expand(const Eigen::VectorXd& r, const Eigen::VectorXd& y_A) const;
