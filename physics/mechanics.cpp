@@ -902,7 +902,9 @@ struct Mechanics::Impl {
       Eigen::VectorXd dy;
       try {
         if (ctrl == Control::force && elimination.prepare(K)) {
-          // GMRES on the unknowns that remain, to the same absolute residual.
+          // GMRES on the unknowns that remain, to the same absolute residual (η |R|; GMRES
+          // stops at half its tolerance, so an interior residual below 1 % of 0.5 η |R| is
+          // dropped: InteriorElimination::reduce).
           const Eigen::VectorXd r = elimination.reduce(Rs, 0.01 * 0.5 * eta * Rs.norm());
           Eigen::VectorXd dy_reduced;
           gmres.solve_refreshing(elimination.reduced(), r, dy_reduced, eta * Rs.norm() / std::max(r.norm(), 1e-300),
