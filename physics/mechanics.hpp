@@ -109,10 +109,10 @@ struct MechanicsSettings {
   // m: the unknowns of the nodes farther than this from every contact face of their
   // body (the electrodes' interiors) are eliminated from the force-controlled Newton
   // systems before GMRES (fem/interior_elimination.hpp): the same solution within
-  // Newton's tolerance (the paper's case: signals within 7·10⁻¹⁰). Such a region stays elastic, so its stiffness changes once per step
-  // (with the temperature), not between Newton iterations; nearer to the contact the
-  // electrode yields under the squeeze on the default weld (within 1.5 mm). 0 or
-  // less: none.
+  // Newton's tolerance (the paper's case: signals within 7·10⁻¹⁰). Such a region
+  // stays elastic, so its stiffness changes once per step (with the temperature), not
+  // between Newton iterations; nearer to the contact the electrode yields under the
+  // squeeze on the default weld (within 1.5 mm). 0 or less: none.
   double interior_elimination_distance = 2e-3;
   int n_gauss = 2;
   bool verbose = false;                   // print Newton iterations to stderr
