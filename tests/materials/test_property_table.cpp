@@ -5,7 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 namespace rsw::materials {
@@ -54,6 +56,39 @@ TEST(PropertyTable, IntegralIsExactForThePiecewiseLinearFunction) {
   // Partial interval 50..200: (20 + 30)/2 * 50 + (30 + 15)/2 * 100 = 1250 + 2250.
   EXPECT_DOUBLE_EQ(table.integral(50, 200), 3500.0);
   EXPECT_DOUBLE_EQ(table.integral(200, 50), -3500.0);
+}
+
+// The interval of a temperature is the one a linear search gives, also at the points,
+// one rounding step on either side of them and where points cluster within a bucket
+// of the lookup index (a latent-heat peak a few millikelvin wide in a 1500 K table).
+TEST(PropertyTable, FindsTheIntervalALinearSearchFindsAtEveryTemperature) {
+  std::vector<double> T = {20.0, 400.0, 1450.0};
+  for (int k = 1; k <= 40; ++k) T.push_back(1450.0 + 1e-3 * k);
+  T.push_back(1460.0);
+  T.push_back(1520.0);
+  std::vector<double> y(T.size());
+  for (std::size_t i = 0; i < T.size(); ++i) y[i] = (i % 2 ? 3.0 : -1.0) * static_cast<double>(i) + 0.1;
+  const PropertyTable table(T, y);
+  auto expected = [&](double t) {
+    std::size_t i = 0;
+    while (i + 2 < T.size() && T[i + 1] <= t) ++i;
+    const double slope = (y[i + 1] - y[i]) / (T[i + 1] - T[i]);
+    return std::pair<double, double>{y[i] + slope * (t - T[i]), slope};
+  };
+  std::vector<double> probes;
+  for (std::size_t i = 0; i + 1 < T.size(); ++i) {
+    probes.push_back(T[i]);
+    probes.push_back(std::nextafter(T[i], T[i + 1]));
+    probes.push_back(std::nextafter(T[i + 1], T[i]));
+    probes.push_back(0.5 * (T[i] + T[i + 1]));
+  }
+  for (int k = 0; k <= 3000; ++k) probes.push_back(20.0 + 0.5 * k);
+  for (const double t : probes) {
+    if (t >= T.back()) continue;
+    const PropertyValue got = table.evaluate(t);
+    EXPECT_EQ(got.value, expected(t).first) << "T = " << t;
+    EXPECT_EQ(got.slope, expected(t).second) << "T = " << t;
+  }
 }
 
 TEST(PropertyTable, RejectsMalformedTables) {
