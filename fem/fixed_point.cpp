@@ -2,8 +2,10 @@
 #include "fem/fixed_point.hpp"
 
 #include <kinsol/kinsol.h>
+#include <kinsol/kinsol_ls.h>
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
+#include <sunlinsol/sunlinsol_spfgmr.h>
 
 #include <algorithm>
 #include <cmath>
@@ -67,6 +69,42 @@ int evaluate(N_Vector u, N_Vector g, void* user_data) {
 }
 
 void silent(int, const char*, const char*, char*, void*) {}
+
+// Newton–Krylov: F(u) = G(u) − u, with an evaluation budget.
+struct NewtonData {
+  const FixedPointMap* G = nullptr;
+  long n = 0;
+  int budget = 0, evaluations = 0;
+  Eigen::VectorXd u, g;
+  std::string failure;
+};
+
+int residual(N_Vector u, N_Vector f, void* user_data) {
+  auto* data = static_cast<NewtonData*>(user_data);
+  if (data->evaluations >= data->budget) {
+    data->failure = "no convergence in " + std::to_string(data->budget) + " evaluations";
+    return -1;
+  }
+  ++data->evaluations;
+  data->u = Eigen::Map<const Eigen::VectorXd>(N_VGetArrayPointer_Serial(u), data->n);
+  if (!data->u.allFinite()) {
+    data->failure = "the Newton iterate is not finite";
+    return -1;
+  }
+  bool ok = false;
+  try {
+    ok = (*data->G)(data->u, data->g);
+  } catch (const std::exception& e) {
+    data->failure = e.what();
+    return -1;
+  }
+  if (!ok || data->g.size() != data->n || !data->g.allFinite()) {
+    if (data->failure.empty()) data->failure = "the map could not be evaluated";
+    return -1;
+  }
+  Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer_Serial(f), data->n) = data->g - data->u;
+  return 0;
+}
 
 struct Context {
   SUNContext ctx = nullptr;
@@ -137,6 +175,75 @@ FixedPointReport solve_fixed_point(const FixedPointMap& G, Eigen::VectorXd& u, c
   KINFree(&kin);
   N_VDestroy(uu);
   N_VDestroy(scale);
+  return report;
+}
+
+FixedPointReport solve_fixed_point_newton(const FixedPointMap& G, Eigen::VectorXd& u,
+                                          const NewtonKrylovSettings& settings) {
+  FixedPointReport report;
+  const long n = static_cast<long>(u.size());
+  if (n == 0) {
+    report.converged = true;
+    return report;
+  }
+  Context context;
+  NewtonData data;
+  data.G = &G;
+  data.n = n;
+  data.budget = std::max(settings.max_evaluations - 1, 1);  // and the final check
+  N_Vector uu = N_VNew_Serial(n, context.ctx);
+  N_Vector scale = N_VNew_Serial(n, context.ctx);
+  std::copy(u.data(), u.data() + n, N_VGetArrayPointer_Serial(uu));
+  N_VConst(1.0, scale);
+  SUNLinearSolver ls = SUNLinSol_SPFGMR(uu, SUN_PREC_NONE, std::max(settings.max_krylov, 1), context.ctx);
+  void* kin = KINCreate(context.ctx);
+  KINInit(kin, residual, uu);
+  KINSetUserData(kin, &data);
+  KINSetLinearSolver(kin, ls, nullptr);
+  KINSetNumMaxIters(kin, data.budget);
+  KINSetFuncNormTol(kin, settings.tolerance);
+  KINSetScaledStepTol(kin, 1e-3 * settings.tolerance);
+  KINSetRelErrFunc(kin, settings.relative_error);
+  // KINSOL's default longest step, 1000 |u_0|₂, is none from u_0 = 0.
+  KINSetMaxNewtonStep(kin, 1000 * std::max(u.norm(), 1.0));
+  KINSetEtaForm(kin, KIN_ETACONSTANT);
+  KINSetEtaConstValue(kin, settings.linear_tolerance);
+  KINSetErrHandlerFn(kin, silent, nullptr);
+  KINSetPrintLevel(kin, 0);
+  const int flag = KINSol(kin, uu, KIN_LINESEARCH, scale, scale);
+  KINFree(&kin);
+  SUNLinSolFree(ls);
+  // KINSOL's last evaluation may be a difference quotient or a rejected line-search
+  // point: G is evaluated once more at the iterate it returns, so that the caller's
+  // state belongs to it, and the test is made there.
+  Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(N_VGetArrayPointer_Serial(uu), n);
+  N_VDestroy(uu);
+  N_VDestroy(scale);
+  const bool usable = flag >= 0 || flag == KIN_LINESEARCH_NONCONV || flag == KIN_MAXITER_REACHED;
+  if (usable && data.failure.empty() && x.allFinite()) {
+    u = x;
+    Eigen::VectorXd g;
+    bool ok = false;
+    try {
+      ok = G(x, g);
+    } catch (const std::exception& e) {
+      data.failure = e.what();
+    }
+    ++data.evaluations;
+    if (ok && g.size() == n && g.allFinite()) {
+      report.change = (g - x).lpNorm<Eigen::Infinity>();
+      report.converged = report.change <= settings.tolerance;
+    } else if (data.failure.empty()) {
+      data.failure = "the map could not be evaluated";
+    }
+  } else if (data.u.size() == n) {
+    u = data.u;
+  }
+  report.iterations = data.evaluations;
+  if (!report.converged)
+    report.message = !data.failure.empty() ? data.failure
+                     : flag < 0            ? "KINSOL error " + std::to_string(flag)
+                                           : "the change at KINSOL's solution is above the tolerance";
   return report;
 }
 

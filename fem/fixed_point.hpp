@@ -1,5 +1,5 @@
-// Anderson-accelerated fixed-point iteration u = G(u), the one wrapper around
-// SUNDIALS KINSOL (strategy KIN_FP) in rsw.
+// Fixed points u = G(u) by Anderson-accelerated iteration or by Newton–Krylov, the one
+// wrapper around SUNDIALS KINSOL (strategies KIN_FP and KIN_LINESEARCH) in rsw.
 //
 // Plain (Picard) iteration u_{k+1} = G(u_k) converges only where G contracts; it
 // diverges, slowly and monotonically, along any mode whose gain exceeds 1. Anderson
@@ -55,5 +55,28 @@ struct FixedPointReport {
 // evaluated point on return.
 using FixedPointMap = std::function<bool(const Eigen::VectorXd& u, Eigen::VectorXd& g)>;
 FixedPointReport solve_fixed_point(const FixedPointMap& G, Eigen::VectorXd& u, const FixedPointSettings& settings);
+
+// The same fixed point by Newton's method on F(u) = G(u) − u = 0 (KINSOL, strategy
+// KIN_LINESEARCH; Brown & Saad, SIAM J. Sci. Stat. Comput. 11 (1990) 450–481): each
+// step solves (∂G/∂u − I) δ = −F(u) by GMRES (SUNDIALS' SPFGMR, no preconditioner) to
+// |residual| ≤ linear_tolerance |F|, with the products (∂G/∂u − I) v as difference
+// quotients of G (KINSOL's: an increment of √relative_error relative to u, where
+// relative_error is the relative accuracy of an evaluation of G), then a backtracking
+// line search on |F|₂ (Dennis & Schnabel, Numerical Methods for Unconstrained
+// Optimization and Nonlinear Equations, SIAM 1996, §6.3). It converges where G has a
+// few strongly expanding modes that Anderson's combination of past iterates does not
+// cancel; each GMRES iteration costs one evaluation of G, so GMRES needs about as many
+// iterations as G has modes that do not contract. Stopping: |G(u) − u|_∞ ≤ tolerance
+// at the returned u, the last point G was evaluated at (as above), within
+// `max_evaluations` evaluations of G.
+struct NewtonKrylovSettings {
+  double tolerance = 1e-8;         // on |G(u) − u|_∞, units of u
+  int max_evaluations = 100;       // of G, difference quotients and the final check included
+  int max_krylov = 50;             // GMRES iterations per Newton step
+  double linear_tolerance = 1e-6;  // relative residual of each GMRES solve
+  double relative_error = 1e-12;   // of an evaluation of G
+};
+FixedPointReport solve_fixed_point_newton(const FixedPointMap& G, Eigen::VectorXd& u,
+                                          const NewtonKrylovSettings& settings);
 
 }  // namespace rsw::fem

@@ -32,7 +32,7 @@ bool ElectroThermalStep::evaluate(const Eigen::VectorXd& T_in, Eigen::VectorXd& 
   }
   clock_.start("thermal");
   thermal_.set_start(T_in);
-  const double tolerance = current_ == 0.0
+  const double tolerance = current_ == 0.0 || exact_inner_
                                ? settings_.thermal_tolerance
                                : std::max(settings_.thermal_tolerance, std::min(0.1, 1e-3 * last_change_));
   const auto report = thermal_.solve(dt_, *positions_, *contact_, joule, interface_heat, tolerance);
@@ -95,12 +95,37 @@ CoupledStepReport ElectroThermalStep::solve(double dt, double current, const std
     coupling = fem::solve_fixed_point(G, T_iter, fp);
     report.iterations += coupling.iterations;
     if (coupling.converged || !failure_.empty()) break;
+    if (attempt == 0) {
+      // Newton's method from the step's start. A field solve that fails at one of its
+      // iterates (far from the fixed point) ends it, not the step: the Anderson
+      // retries follow.
+      ++newton_solves_;
+      fem::NewtonKrylovSettings newton;
+      newton.tolerance = settings_.tolerance;
+      newton.max_evaluations = 2 * settings_.max_iterations;  // 120 by default; rescues took 36–100
+      T_iter = T_guess;
+      exact_inner_ = true;
+      const fem::FixedPointReport solved = fem::solve_fixed_point_newton(G, T_iter, newton);
+      exact_inner_ = false;
+      report.iterations += solved.iterations;
+      if (verbose_)
+        std::fprintf(stderr, "  coupling: Newton %s after %d evaluations (change %.3e K)%s%s\n",
+                     solved.converged ? "converged" : "failed", solved.iterations, solved.change,
+                     solved.converged ? "" : ": ", solved.converged ? "" : solved.message.c_str());
+      if (solved.converged) {
+        ++newton_rescues_;
+        coupling = solved;
+        break;
+      }
+      failure_.clear();
+    }
   }
   report.converged = coupling.converged;
   if (!report.converged)
     report.failure = failure_.empty()
                          ? "electro-thermal coupling did not converge in " + std::to_string(settings_.max_iterations) +
-                               " iterations, also" +
+                               " iterations, also by Newton's method (" + std::to_string(2 * settings_.max_iterations) +
+                               " evaluations)," +
                                (other_depth != depth ? " with Anderson depth " + std::to_string(other_depth) + " and"
                                                      : std::string()) +
                                " with damping 0.7 and 0.4 (last change " + std::to_string(coupling.change) + " K)"

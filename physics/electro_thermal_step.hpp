@@ -16,11 +16,17 @@
 // tightly as a lone thermal step.
 //
 // Retry policy: where the iteration cycles (kinks of tabulated properties at a
-// contact edge that heats), the step is solved again from its start with the other
-// Anderson depth (2, or 5 where 2 is configured), then with damping 0.7 and 0.4 at
-// both depths. On the coupling failures of the paper-mesh Table I study each depth
-// rescued about half of them, mostly different ones. Only the path to the fixed point
-// changes, not the point (to the tolerance).
+// contact edge that heats), the step is solved again from its start by Newton's
+// method on T − G(T) (Newton–Krylov, fem/fixed_point.hpp; its inner thermal solves to
+// the thermal tolerance, so that the difference quotients of G are accurate), then
+// with the other Anderson depth (2, or 5 where 2 is configured), then with damping 0.7
+// and 0.4 at both depths. Only the path to the fixed point changes, not the point (to
+// the tolerance): a step that one of them rescues keeps the step schedule, which a
+// step solved in parts (the weld driver's last resort) does not. On the paper-mesh
+// Table I study Newton leaves 2 of 90 welds with a step solved in parts (6 with the
+// Anderson retries alone, 4 with Newton after them); on its four slowest welds it
+// converged in 9 of the 14 steps where Anderson failed, in 36–100 evaluations of G
+// against up to 300 for the five Anderson retries (docs/PERFORMANCE.md, "Studies").
 #pragma once
 
 #include "contact/interface_laws.hpp"
@@ -66,6 +72,8 @@ class ElectroThermalStep {
 
   bool has_electrical_solution() const { return have_electrical_; }  // a step with current has run
   int retries() const { return retries_; }                         // attempts after the first, summed
+  int newton_solves() const { return newton_solves_; }              // of which by Newton
+  int newton_rescues() const { return newton_rescues_; }            // of which converged
 
  private:
   // G(T_in) → T_out; false (with failure_ set) if a field solve failed.
@@ -78,7 +86,8 @@ class ElectroThermalStep {
   Stopwatch& clock_;
   bool verbose_;
   bool have_electrical_ = false;
-  int retries_ = 0;
+  int retries_ = 0, newton_solves_ = 0, newton_rescues_ = 0;
+  bool exact_inner_ = false;  // inner thermal solves to the thermal tolerance (Newton's evaluations)
   // The step being solved.
   double dt_ = 0, current_ = 0;
   const std::vector<fem::Point>* positions_ = nullptr;

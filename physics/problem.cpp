@@ -337,14 +337,17 @@ void declare_solver(ConfigSchema& s) {
            "and rejected by the range.");
   s.integer("solver.max_coupling_iterations").default_value("60")
       .range(Range::closed(1, 1000))
-      .doc("Cap on the electro-thermal coupling iterations of one time step; reaching it "
-           "fails the run with the step named.");
+      .doc("Cap on the electro-thermal coupling iterations of one attempt at a time step (the "
+           "Newton retry may evaluate the coupling twice as often); where every attempt "
+           "reaches it, the step is solved in halves, and where those fail too the run fails "
+           "with the step named.");
   s.integer("solver.coupling_acceleration_depth").default_value("5")
       .range(Range::closed(0, 50))
       .doc("Anderson acceleration depth of the electro-thermal fixed-point iteration (SUNDIALS "
            "KINSOL): the last this-many iterates are combined; 0 is plain (Picard) iteration, "
            "which diverges where the current crowds into a heating contact edge. A step that does "
-           "not converge is retried with depth 2 (5 if 2 is set), then damped by 0.7 and 0.4.");
+           "not converge is solved again by Newton's method on the fixed point (Newton-Krylov, "
+           "KINSOL), then with depth 2 (5 if 2 is set), then damped by 0.7 and 0.4.");
 
   s.number("solver.mechanics_tolerance", "1", "1").default_value("1e-6")
       .range(Range::closed(1e-12, 1e-2))

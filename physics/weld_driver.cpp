@@ -134,7 +134,11 @@ void WeldDriver::collect_counts() {
     result_.n_mechanics_substepped = stepper_->splits();
     result_.n_mechanics_loose = stepper_->loose_substeps();
   }
-  if (coupling_) result_.n_coupling_retries = coupling_->retries();
+  if (coupling_) {
+    result_.n_coupling_retries = coupling_->retries();
+    result_.n_coupling_newton_solves = coupling_->newton_solves();
+    result_.n_coupling_newton_rescues = coupling_->newton_rescues();
+  }
 }
 
 RunResult WeldDriver::fail(const std::string& message) {

@@ -262,6 +262,8 @@ void write_summary_json(const fs::path& file, const Problem& problem, const RunR
   j["mechanics_substep_splits"] = result.n_mechanics_substepped;
   j["mechanics_loose_substeps"] = result.n_mechanics_loose;
   j["coupling_retries"] = result.n_coupling_retries;
+  j["coupling_newton_solves"] = result.n_coupling_newton_solves;
+  j["coupling_newton_rescues"] = result.n_coupling_newton_rescues;
   j["coupling_substep_splits"] = result.n_coupling_splits;
   for (const auto& [name, count] : result.mechanics_linear_algebra) j["mechanics_linear_algebra"][name] = count;
   for (const auto& [name, count] : result.thermal_linear_algebra) j["thermal_linear_algebra"][name] = count;

@@ -79,6 +79,8 @@ struct RunResult {
   int n_mechanics_substepped = 0;   // mechanics sub-steps made by halving (mechanics_stepper.hpp)
   int n_mechanics_loose = 0;        // smallest sub-steps accepted at a stalled residual (mechanics_stepper.hpp)
   int n_coupling_retries = 0;       // electro-thermal solves retried (electro_thermal_step.hpp)
+  int n_coupling_newton_solves = 0;  // of the steps the first Anderson iteration failed: solved by Newton
+  int n_coupling_newton_rescues = 0;  // of which converged
   int n_coupling_splits = 0;        // weld steps (or parts) halved after the coupling failed
   double first_coupling_split_end = std::nan("");  // s, end of the first step solved in parts
   // Linear algebra of the mechanics (gmres_iterations, factorisations, surrogates,

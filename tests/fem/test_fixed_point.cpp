@@ -1,10 +1,12 @@
-// Anderson-accelerated fixed-point iteration (fem/fixed_point): fixed points known in
-// closed form, reached also where plain iteration diverges.
+// Fixed points u = G(u) (fem/fixed_point): Anderson-accelerated iteration and
+// Newton–Krylov, at fixed points known in closed form, also where plain iteration
+// diverges.
 #include "fem/fixed_point.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <stdexcept>
 
 using rsw::fem::FixedPointSettings;
 using rsw::fem::solve_fixed_point;
@@ -171,4 +173,87 @@ TEST(FixedPoint, ContractionEstimateSavesTheConfirmingEvaluation) {
   const auto slow_report = solve_fixed_point(slow, u, s);
   ASSERT_TRUE(slow_report.converged) << slow_report.message;
   EXPECT_FALSE(slow_report.estimated);
+}
+
+// Newton–Krylov on a linear map whose modes expand (gains 3, −2.5) or contract: the
+// Jacobian of F(u) = G(u) − u is A − I, so one Newton step whose GMRES solve spans the
+// five modes (five products, each an evaluation of G) lands on u* up to the forcing
+// 10⁻⁶ and the difference quotients; a second step and the final check end it.
+TEST(FixedPointNewton, LinearMapWithExpandingModesIsSolvedInTwoNewtonSteps) {
+  Eigen::VectorXd eigenvalues(5);
+  eigenvalues << 3.0, -2.5, 0.5, 0.2, -0.4;
+  const LinearMap map(eigenvalues);
+  Eigen::VectorXd last;
+  auto G = [&](const Eigen::VectorXd& x, Eigen::VectorXd& g) {
+    g = map.A * x + map.b;
+    last = x;
+    return true;
+  };
+  rsw::fem::NewtonKrylovSettings s;
+  s.tolerance = 1e-9;
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(5);
+  const auto report = rsw::fem::solve_fixed_point_newton(G, u, s);
+  ASSERT_TRUE(report.converged) << report.message;
+  EXPECT_LT((u - map.fixed_point()).lpNorm<Eigen::Infinity>(), 1e-8);
+  EXPECT_LE(report.change, s.tolerance);
+  // Each step: F at the iterate and at most 5 products; then the final check.
+  EXPECT_LE(report.iterations, 2 * (1 + 5) + 2);
+  EXPECT_EQ(last, u);  // the returned point is the last one G was evaluated at
+}
+
+// u = G(u) = u − 10 atan(u − c) componentwise, c_i in [1, 2]: at the fixed point u* = c
+// the gain is 1 − 10 = −9, so plain iteration runs away. Newton's method on atan from
+// |u − c| above 1.39 overshoots ever further (1.39 solves 2x = (1 + x²) atan x); from
+// u = 0 the line search shortens those steps.
+TEST(FixedPointNewton, LineSearchReachesAFixedPointThatPlainIterationRunsAwayFrom) {
+  const Eigen::VectorXd c = Eigen::VectorXd::LinSpaced(4, 1.0, 2.0);
+  auto G = [&](const Eigen::VectorXd& x, Eigen::VectorXd& g) {
+    g = x.array() - 10.0 * (x - c).array().atan();
+    return true;
+  };
+  FixedPointSettings plain;
+  plain.depth = 0;
+  plain.max_iterations = 60;
+  plain.tolerance = 1e-10;
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(4);
+  EXPECT_FALSE(solve_fixed_point(G, u, plain).converged);
+
+  rsw::fem::NewtonKrylovSettings s;
+  s.tolerance = 1e-10;
+  u.setZero();
+  const auto report = rsw::fem::solve_fixed_point_newton(G, u, s);
+  ASSERT_TRUE(report.converged) << report.message;
+  EXPECT_LT((u - c).lpNorm<Eigen::Infinity>(), 1e-10);
+  EXPECT_LE(report.iterations, s.max_evaluations);
+}
+
+// A map without a fixed point (G(u) = u + 1 + 0.5 sin u: F = 1 + 0.5 sin u ≥ 0.5) uses
+// at most its budget of evaluations and is reported as not converged; a map that
+// fails ends the solve with the map's reason.
+TEST(FixedPointNewton, NoFixedPointOrAFailingMapEndsWithinTheBudgetAndSaysWhy) {
+  int calls = 0;
+  auto none = [&](const Eigen::VectorXd& x, Eigen::VectorXd& g) {
+    ++calls;
+    g = x.array() + 1.0 + 0.5 * x.array().sin();
+    return true;
+  };
+  rsw::fem::NewtonKrylovSettings s;
+  s.max_evaluations = 30;
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(3);
+  const auto report = rsw::fem::solve_fixed_point_newton(none, u, s);
+  EXPECT_FALSE(report.converged);
+  EXPECT_FALSE(report.message.empty());
+  EXPECT_LE(calls, s.max_evaluations);
+  EXPECT_EQ(report.iterations, calls);
+
+  calls = 0;
+  auto failing = [&](const Eigen::VectorXd& x, Eigen::VectorXd& g) {
+    if (++calls == 4) throw std::runtime_error("thermal solve failed");
+    g = 0.5 * x + Eigen::VectorXd::Ones(3);
+    return true;
+  };
+  u.setZero();
+  const auto failed = rsw::fem::solve_fixed_point_newton(failing, u, s);
+  EXPECT_FALSE(failed.converged);
+  EXPECT_EQ(failed.message, "thermal solve failed");
 }
