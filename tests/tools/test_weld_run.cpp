@@ -805,6 +805,36 @@ TEST(WeldRun, CouplingThatFailsInAStepIsSolvedInHalvesWithTheSameResult) {
   fs::remove_all(base);
 }
 
+// Where a step's Anderson iteration does not converge, Newton's method on T − G(T)
+// (physics/electro_thermal_step.hpp) solves it before any other retry, so the step
+// keeps its length. Design point 85 of the Table I study on the coarse mesh has one
+// such step: Newton converges there, no Anderson retry and no halves are needed, and
+// the weld's energy balances (electrical = stored + removed) to 10⁻⁸ of its energy,
+// as a weld whose steps all converge does.
+TEST(WeldRun, CouplingStepThatAndersonCannotSolveIsSolvedWholeByNewton) {
+  const fs::path base = fs::temp_directory_path() / ("rsw_newton_" + std::to_string(::getpid()));
+  const std::string point =
+      " --set contact.sheet_sheet.film_thickness=7.924078053928453e-07m"
+      " --set 'contact.sheet_sheet.coating_resistivity=1.3205149757123101e-05ohm*m'"
+      " --set contact.electrode_sheet.film_thickness=0.0001187305645988809m"
+      " --set 'contact.electrode_sheet.coating_resistivity=3.179198417006697e-06ohm*m'"
+      " --set contact.electrode_sheet.htc_p1=0.0017877863889798917"
+      " --set 'thermal.melt_conductivity=133.33143871981588W/(m*K)'";
+  nlohmann::json summary;
+  coarse_features(base, point, &summary);
+  const int solves = summary.at("coupling_newton_solves").get<int>();
+  std::printf("Newton solves %d, rescues %d, retries %d, halved parts %d\n", solves,
+              summary.at("coupling_newton_rescues").get<int>(), summary.at("coupling_retries").get<int>(),
+              summary.at("coupling_substep_splits").get<int>());
+  EXPECT_GE(solves, 1);
+  EXPECT_EQ(summary.at("coupling_newton_rescues").get<int>(), solves);
+  EXPECT_EQ(summary.at("coupling_retries").get<int>(), 0);
+  EXPECT_EQ(summary.at("coupling_substep_splits").get<int>(), 0);
+  const auto& energy = summary.at("energy_J");
+  EXPECT_LT(std::abs(energy.at("imbalance").get<double>()), 1e-8 * energy.at("electrical").get<double>());
+  fs::remove_all(base);
+}
+
 // The paper's stack is symmetric about its faying plane, so rsw solves its upper half
 // (solver.mirror_symmetry = auto, fem/mirror.hpp). Both runs solve the same discrete
 // equations, each to the solvers' tolerances (out-of-balance force 10⁻⁶ of the
