@@ -16,6 +16,32 @@ namespace rsw::fem {
 
 namespace {
 
+// g = G(u) for a finite u; false, with the reason in `failure`, where u is not finite,
+// G fails or throws, or returns a vector of the wrong size or with non-finite entries.
+bool call_map(const FixedPointMap& G, const Eigen::VectorXd& u, Eigen::VectorXd& g, std::string& failure,
+              const char* iterate) {
+  if (!u.allFinite()) {
+    failure = std::string("the ") + iterate + " is not finite";
+    return false;
+  }
+  bool ok = false;
+  try {
+    ok = G(u, g);
+  } catch (const std::exception& e) {
+    failure = e.what();
+    return false;
+  }
+  if (!ok) {
+    if (failure.empty()) failure = "the map could not be evaluated";
+    return false;
+  }
+  if (g.size() != u.size() || !g.allFinite()) {
+    failure = "the map returned a vector of the wrong size or with non-finite entries";
+    return false;
+  }
+  return true;
+}
+
 struct CallbackData {
   const FixedPointMap* G = nullptr;
   long n = 0;
@@ -32,25 +58,7 @@ struct CallbackData {
 int evaluate(N_Vector u, N_Vector g, void* user_data) {
   auto* data = static_cast<CallbackData*>(user_data);
   data->u = Eigen::Map<const Eigen::VectorXd>(N_VGetArrayPointer_Serial(u), data->n);
-  if (!data->u.allFinite()) {
-    data->failure = "the accelerated iterate is not finite";
-    return -1;
-  }
-  bool ok = false;
-  try {
-    ok = (*data->G)(data->u, data->g);
-  } catch (const std::exception& e) {
-    data->failure = e.what();
-    return -1;
-  }
-  if (!ok) {
-    if (data->failure.empty()) data->failure = "the map could not be evaluated";
-    return -1;
-  }
-  if (data->g.size() != data->n || !data->g.allFinite()) {
-    data->failure = "the map returned a vector of the wrong size or with non-finite entries";
-    return -1;
-  }
+  if (!call_map(*data->G, data->u, data->g, data->failure, "accelerated iterate")) return -1;
   std::copy(data->g.data(), data->g.data() + data->n, N_VGetArrayPointer_Serial(g));
   if (data->estimate_error) {
     auto& c = data->changes;
@@ -87,21 +95,7 @@ int residual(N_Vector u, N_Vector f, void* user_data) {
   }
   ++data->evaluations;
   data->u = Eigen::Map<const Eigen::VectorXd>(N_VGetArrayPointer_Serial(u), data->n);
-  if (!data->u.allFinite()) {
-    data->failure = "the Newton iterate is not finite";
-    return -1;
-  }
-  bool ok = false;
-  try {
-    ok = (*data->G)(data->u, data->g);
-  } catch (const std::exception& e) {
-    data->failure = e.what();
-    return -1;
-  }
-  if (!ok || data->g.size() != data->n || !data->g.allFinite()) {
-    if (data->failure.empty()) data->failure = "the map could not be evaluated";
-    return -1;
-  }
+  if (!call_map(*data->G, data->u, data->g, data->failure, "Newton iterate")) return -1;
   Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer_Serial(f), data->n) = data->g - data->u;
   return 0;
 }
@@ -223,18 +217,10 @@ FixedPointReport solve_fixed_point_newton(const FixedPointMap& G, Eigen::VectorX
   if (usable && data.failure.empty() && x.allFinite()) {
     u = x;
     Eigen::VectorXd g;
-    bool ok = false;
-    try {
-      ok = G(x, g);
-    } catch (const std::exception& e) {
-      data.failure = e.what();
-    }
     ++data.evaluations;
-    if (ok && g.size() == n && g.allFinite()) {
+    if (call_map(G, x, g, data.failure, "Newton iterate")) {
       report.change = (g - x).lpNorm<Eigen::Infinity>();
       report.converged = report.change <= settings.tolerance;
-    } else if (data.failure.empty()) {
-      data.failure = "the map could not be evaluated";
     }
   } else if (data.u.size() == n) {
     u = data.u;
