@@ -1,14 +1,10 @@
 // Piecewise-linear temperature tables and flow-curve tables (see property_table.hpp).
-// A temperature table finds the interval of a temperature through a bucket index
-// (equal-width buckets, each naming the interval of its lower edge; a short walk from
-// there), which gives exactly the interval a bisection gives without its unpredictable
-// branches: the field solvers evaluate these tables at every Gauss point. Flow curves
-// bisect their sorted point lists (std::upper_bound).
+// Lookups bisect the sorted point lists (std::upper_bound); tables hold tens of
+// points, so no caching of the last interval is needed.
 #include "materials/property_table.hpp"
 
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
 #include <stdexcept>
 
 namespace rsw::materials {
@@ -65,30 +61,6 @@ PropertyTable::PropertyTable(std::vector<double> temperatures, std::vector<doubl
     cumulative_[i] = cumulative_[i - 1] + 0.5 * (values_[i] + values_[i - 1]) *
                                               (temperatures_[i] - temperatures_[i - 1]);
   }
-  if (temperatures_.size() >= 2) {
-    // 16 buckets per interval on average (at most 4096): the walk in interval() is
-    // then nearly always empty; it keeps the lookup exact where points cluster.
-    const std::size_t n_buckets = std::min<std::size_t>(4096, std::max<std::size_t>(64, 16 * (temperatures_.size() - 1)));
-    bucket_scale_ = static_cast<double>(n_buckets) / (temperatures_.back() - temperatures_.front());
-    bucket_interval_.resize(n_buckets);
-    for (std::size_t b = 0; b < n_buckets; ++b)
-      bucket_interval_[b] = static_cast<std::uint32_t>(
-          std::min(interval_of(temperatures_, temperatures_.front() + static_cast<double>(b) / bucket_scale_),
-                   temperatures_.size() - 2));
-  }
-}
-
-std::size_t PropertyTable::interval(double temperature) const {
-  // The largest i <= n - 2 with T_i <= temperature, for T_0 <= temperature < T_last
-  // (what interval_of() returns there).
-  const std::size_t last_interval = temperatures_.size() - 2;
-  const double s = (temperature - temperatures_.front()) * bucket_scale_;
-  const std::size_t b = s < static_cast<double>(bucket_interval_.size()) ? static_cast<std::size_t>(s)
-                                                                         : bucket_interval_.size() - 1;
-  std::size_t i = bucket_interval_[b];
-  while (i < last_interval && temperatures_[i + 1] <= temperature) ++i;
-  while (i > 0 && temperatures_[i] > temperature) --i;  // the bucket's edge rounded above the temperature
-  return i;
 }
 
 PropertyTable PropertyTable::constant(double value) {
@@ -96,14 +68,7 @@ PropertyTable PropertyTable::constant(double value) {
 }
 
 PropertyValue PropertyTable::evaluate(double temperature) const {
-  if (temperature < temperatures_.front()) return {values_.front(), 0.0};
-  if (temperature >= temperatures_.back()) return {values_.back(), 0.0};
-  return interpolate_in(interval(temperature), temperature);
-}
-
-PropertyValue PropertyTable::interpolate_in(std::size_t i, double temperature) const {
-  const double slope = (values_[i + 1] - values_[i]) / (temperatures_[i + 1] - temperatures_[i]);
-  return {values_[i] + slope * (temperature - temperatures_[i]), slope};
+  return interpolate(temperatures_, values_, temperature);
 }
 
 double PropertyTable::integral_from_start(double temperature) const {
@@ -111,8 +76,8 @@ double PropertyTable::integral_from_start(double temperature) const {
   const double last = temperatures_.back();
   if (temperature <= first) return values_.front() * (temperature - first);
   if (temperature >= last) return cumulative_.back() + values_.back() * (temperature - last);
-  const std::size_t i = interval(temperature);
-  const double y = interpolate_in(i, temperature).value;
+  const std::size_t i = interval_of(temperatures_, temperature);
+  const double y = evaluate(temperature).value;
   return cumulative_[i] + 0.5 * (values_[i] + y) * (temperature - temperatures_[i]);
 }
 

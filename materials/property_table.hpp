@@ -20,7 +20,6 @@
 // Units: whatever the caller stores (the material library stores SI: Pa, degC).
 #pragma once
 
-#include <cstdint>
 #include <string>
 #include <utility>
 #include <vector>
@@ -56,15 +55,10 @@ class PropertyTable {
  private:
   // Integral from temperatures_.front() to `temperature`.
   double integral_from_start(double temperature) const;
-  // Interval i of T_0 <= temperature < T_last ([T_i, T_i+1)), and the line on it.
-  std::size_t interval(double temperature) const;
-  PropertyValue interpolate_in(std::size_t i, double temperature) const;
 
   std::vector<double> temperatures_;
   std::vector<double> values_;
   std::vector<double> cumulative_;  // integral from temperatures_.front() to T_i
-  double bucket_scale_ = 0;                    // buckets per kelvin over [T_0, T_last]
-  std::vector<std::uint32_t> bucket_interval_;  // interval of each bucket's lower edge
 };
 
 // One flow curve: yield stress against equivalent plastic strain at one temperature.
