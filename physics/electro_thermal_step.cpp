@@ -102,7 +102,7 @@ CoupledStepReport ElectroThermalStep::solve(double dt, double current, const std
       ++newton_solves_;
       fem::NewtonKrylovSettings newton;
       newton.tolerance = settings_.tolerance;
-      newton.max_evaluations = 2 * settings_.max_iterations;  // 120 by default; rescues took 36–100
+      newton.max_evaluations = newton_budget();
       T_iter = T_guess;
       exact_inner_ = true;
       const fem::FixedPointReport solved = fem::solve_fixed_point_newton(G, T_iter, newton);
@@ -124,7 +124,7 @@ CoupledStepReport ElectroThermalStep::solve(double dt, double current, const std
   if (!report.converged)
     report.failure = failure_.empty()
                          ? "electro-thermal coupling did not converge in " + std::to_string(settings_.max_iterations) +
-                               " iterations, also by Newton's method (" + std::to_string(2 * settings_.max_iterations) +
+                               " iterations, also by Newton's method (" + std::to_string(newton_budget()) +
                                " evaluations)," +
                                (other_depth != depth ? " with Anderson depth " + std::to_string(other_depth) + " and"
                                                      : std::string()) +

@@ -80,6 +80,9 @@ class ElectroThermalStep {
  private:
   // G(T_in) → T_out; false (with failure_ set) if a field solve failed.
   bool evaluate(const Eigen::VectorXd& T_in, Eigen::VectorXd& T_out);
+  // Evaluations of G allowed to the Newton retry: twice an Anderson attempt's (120 by
+  // default; the rescues measured took 36–100).
+  int newton_budget() const { return 2 * settings_.max_iterations; }
 
   const fem::Mesh& mesh_;
   Electrical& electrical_;
