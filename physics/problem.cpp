@@ -152,7 +152,7 @@ void declare_electrodes_and_mesh(ConfigSchema& s) {
       .doc("Edge of a level-0 cell (paper §2.1: 0.25 mm).");
   s.number("mesh.weld_zone.radius", "m", "mm").default_value(mm(mesh.weld_zone_radius))
       .range(Range::open_closed(0, 200))
-      .doc("Radius of the weld-zone refinement box, from the axis.");
+      .doc("Radius of the weld-zone refinement box, from the axis (the paper does not size the box; docs/MESHES.md).");
   s.number("mesh.weld_zone.electrode_depth", "m", "mm").default_value(mm(mesh.weld_zone_electrode_depth))
       .range(Range::closed(0, 50))
       .doc("How far the weld-zone box reaches into each electrode beyond the sheet stack.");
@@ -370,7 +370,7 @@ void declare_solver(ConfigSchema& s) {
            "(docs/MODEL.md, 'Mirror symmetry'). off: always the whole stack. summary.json records which ran.");
   s.integer("solver.max_cells").default_value("100000")
       .range(Range::closed(1, 1e9))
-      .doc("Refuse a mesh of more cells (estimated; a run needs 35 MB + 21 kB per cell). The paper's has 7700.");
+      .doc("Refuse a mesh of more cells (estimated; a run needs 35 MB + 21 kB per cell). The paper's case has 6230.");
   s.integer("solver.max_steps").default_value("100000")
       .range(Range::closed(1, 1e9))
       .doc("Refuse a weld stage of more time steps (an upper bound). The default takes 220.");
@@ -523,8 +523,8 @@ double case_default(const std::string& key) {
 // the square of its finest edge (base/2^levels), the refinement boxes' likewise, and the
 // rest of the sheets' and the electrodes' r–z rectangles over the base size squared; the
 // cone, dome and bore make the real counts of the paper's case about 1.3 times smaller
-// (1184, 7700 and 29 958 cells at base 0.5/1 level, 0.25/2 and 0.125/2: estimates 1600,
-// 9856, 39 424). Steps: an upper bound, the steps of the largest sizes plus one per
+// (1100, 6230 and 24 168 cells at base 0.5/1 level, 0.25/2 and 0.125/2: estimates 1510,
+// 8056, 32 224). Steps: an upper bound, the steps of the largest sizes plus one per
 // output time and table breakpoint that may fall between them.
 static void check_resources(const Config& config, const Problem& problem) {
   const meshes::MeshSettings& mesh = problem.mesh;

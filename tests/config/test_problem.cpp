@@ -81,8 +81,8 @@ TEST(Problem, PaperCaseGivesDocumentedValuesInSi) {
   expect_paper_electrode(p.geometry.lower);
 
   EXPECT_DOUBLE_EQ(p.mesh.base_size, 0.25e-3);
-  EXPECT_DOUBLE_EQ(p.mesh.weld_zone_radius, 4.5e-3);
-  EXPECT_DOUBLE_EQ(p.mesh.weld_zone_electrode_depth, 1e-3);
+  EXPECT_DOUBLE_EQ(p.mesh.weld_zone_radius, 3.5e-3);
+  EXPECT_DOUBLE_EQ(p.mesh.weld_zone_electrode_depth, 0.5e-3);
   EXPECT_EQ(p.mesh.weld_zone_levels, 2);
   EXPECT_TRUE(p.mesh.extra_boxes.empty());
 
@@ -118,17 +118,17 @@ TEST(Problem, PaperCaseGivesDocumentedValuesInSi) {
 }
 
 // Resource guards before anything is allocated. Cells: the weld zone's r–z area
-// R (h_stack + 2 d) = 4.5 mm × 4 mm over the square of its edge 0.01 mm / 2⁴,
-// 18 / (6.25e-4)² = 4.608e7, plus the rest of the sheets' (15 mm × 2 mm) and the
-// caps' (2 × 7.9 mm × 20 mm) rectangles, 328 mm², over (0.01 mm)²: 3.28e6, in all
-// 4.94e7, far above the default limit of 1e5; the message names the limit's key and
+// R (h_stack + 2 d) = 3.5 mm × 3 mm over the square of its edge 0.01 mm / 2⁴,
+// 10.5 / (6.25e-4)² = 2.688e7, plus the rest of the sheets' (15 mm × 2 mm) and the
+// caps' (2 × 7.9 mm × 20 mm) rectangles, 346 − 10.5 = 335.5 mm², over (0.01 mm)²:
+// 3.355e6, in all 3.02e7, far above the default limit of 1e5; the message names the limit's key and
 // the memory. Steps: output every 1e-6 ms over the 160 ms weld stage
 // adds 1.6e8 to the 80 + 140 steps of the step sizes; the output interval is blamed.
 TEST(Problem, CaseBeyondTheCellOrStepLimitIsRefusedNamingTheLimitKey) {
   const std::string cells = error_of([] {
     load_problem(paper_case, {"mesh.base_size=0.01 mm", "mesh.weld_zone.levels=4"});
   });
-  EXPECT_HAS(cells, "about 4.94e+07 cells");
+  EXPECT_HAS(cells, "about 3.02e+07 cells");
   EXPECT_HAS(cells, "solver.max_cells = 100000");
   EXPECT_HAS(cells, "GB of memory");
   EXPECT_NO_THROW(load_problem(paper_case, {"mesh.base_size=0.01 mm", "mesh.weld_zone.levels=4", "solver.max_cells=100000000"}));

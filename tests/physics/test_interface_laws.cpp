@@ -672,8 +672,13 @@ TEST(MechanicalContactLaws, RegularisedCoulombSticksSaturatesAndHasExactDerivati
 // face master nodes, whose two faces give distances that differ in the last bits);
 // through a master node that is not a number and a master face collapsed to a point
 // (neither can be closest); and back to rest, where slave and master nodes coincide.
+// The weld zone reaches 4.5 mm and 1 mm into the electrodes here: under these fields
+// that mesh has points whose two closest faces tie to rounding (the default box's
+// has none), so the search's tie rule is exercised too.
 TEST(InterfacePairing, PrunedSearchPicksTheFaceAnExhaustiveSearchPicks) {
-  const physics::Problem problem = physics::make_problem(fem::Config(physics::weld_case_schema()));
+  physics::Problem problem = physics::make_problem(fem::Config(physics::weld_case_schema()));
+  problem.mesh.weld_zone_radius = 4.5e-3;
+  problem.mesh.weld_zone_electrode_depth = 1e-3;
   const fem::Mesh mesh = meshes::weld_mesh(problem.geometry, problem.mesh);
   std::vector<double> noise(mesh.n_nodes());
   unsigned state = 12345;

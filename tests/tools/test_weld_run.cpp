@@ -809,8 +809,9 @@ TEST(WeldRun, CouplingThatFailsInAStepIsSolvedInHalvesWithTheSameResult) {
 // (physics/electro_thermal_step.hpp) solves it before any other retry, so the step
 // keeps its length. Design point 85 of the Table I study on the coarse mesh has one
 // such step: Newton converges there, no Anderson retry and no halves are needed, and
-// the weld's energy balances (electrical = stored + removed) to 10⁻⁸ of its energy,
-// as a weld whose steps all converge does.
+// the weld's energy balances (electrical = stored + removed) to 10⁻⁷ of its energy,
+// as the welds of that study whose steps all converge at once do (1.3·10⁻⁸ here, at
+// most 7·10⁻⁸ among them).
 TEST(WeldRun, CouplingStepThatAndersonCannotSolveIsSolvedWholeByNewton) {
   const fs::path base = fs::temp_directory_path() / ("rsw_newton_" + std::to_string(::getpid()));
   const std::string point =
@@ -831,7 +832,7 @@ TEST(WeldRun, CouplingStepThatAndersonCannotSolveIsSolvedWholeByNewton) {
   EXPECT_EQ(summary.at("coupling_retries").get<int>(), 0);
   EXPECT_EQ(summary.at("coupling_substep_splits").get<int>(), 0);
   const auto& energy = summary.at("energy_J");
-  EXPECT_LT(std::abs(energy.at("imbalance").get<double>()), 1e-8 * energy.at("electrical").get<double>());
+  EXPECT_LT(std::abs(energy.at("imbalance").get<double>()), 1e-7 * energy.at("electrical").get<double>());
   fs::remove_all(base);
 }
 
