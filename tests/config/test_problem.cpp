@@ -121,8 +121,8 @@ TEST(Problem, PaperCaseGivesDocumentedValuesInSi) {
 // R (h_stack + 2 d) = 3.5 mm × 3 mm over the square of its edge 0.01 mm / 2⁴,
 // 10.5 / (6.25e-4)² = 2.688e7, plus the rest of the sheets' (15 mm × 2 mm) and the
 // caps' (2 × 7.9 mm × 20 mm) rectangles, 346 − 10.5 = 335.5 mm², over (0.01 mm)²:
-// 3.355e6, in all 3.02e7, far above the default limit of 1e5; the message names the limit's key and
-// the memory. Steps: output every 1e-6 ms over the 160 ms weld stage
+// 3.355e6, in all 3.02e7, far above the default limit of 1e5; the message names the
+// limit's key and the memory. Steps: output every 1e-6 ms over the 160 ms weld stage
 // adds 1.6e8 to the 80 + 140 steps of the step sizes; the output interval is blamed.
 TEST(Problem, CaseBeyondTheCellOrStepLimitIsRefusedNamingTheLimitKey) {
   const std::string cells = error_of([] {
