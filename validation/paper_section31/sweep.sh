@@ -13,7 +13,7 @@
 # lambda_m leaves R_beta virtually unchanged, lowers T_max substantially and raises
 # d_n,sol and h_n,sol, saturating above about 100 W/(m K).
 #   bash validation/paper_section31/sweep.sh [extra --set options]
-# JOBS=2 runs two at a time (one core each); 9 runs, about 4 min on one core.
+# JOBS=2 runs two at a time (one core each); 9 runs of about 12 s, 1 min with JOBS=2.
 # Results and their reading: validation/paper_section31/README.md.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
